@@ -1,0 +1,76 @@
+# polydem top-level build. `make deps` installs the Debian packages, `make` builds build/polydem,
+# `make check` builds and runs every test, `make check SANITIZE=1` runs them under ASan+UBSan.
+
+CC ?= cc
+ifeq ($(SANITIZE),1)
+BUILD := build/san
+SANFLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=undefined
+else
+BUILD := build
+SANFLAGS :=
+endif
+
+# -ffp-contract=off: the OpenCL kernels are built with FP_CONTRACT OFF too, so host and device
+# round the same operations the same way (the overlap paths must agree to 1e-12).
+CFLAGS ?= -O2 -g
+CFLAGS += -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -Werror -ffp-contract=off \
+          -Iengine -Ikernels -I$(BUILD)/gen $(SANFLAGS)
+LDLIBS := -lOpenCL -lm
+LDFLAGS += $(SANFLAGS)
+
+ENGINE_SRC := $(wildcard engine/*.c)
+ENGINE_OBJ := $(patsubst engine/%.c,$(BUILD)/engine/%.o,$(ENGINE_SRC))
+CL_SRC := $(wildcard kernels/*.cl)
+CL_HDR := $(wildcard kernels/*.h)
+CL_GEN := $(BUILD)/gen/cl_sources.h
+
+UNIT_SRC := $(wildcard tests/unit/test_*.c) $(wildcard tests/physics/test_*.c)
+UNIT_BIN := $(patsubst tests/%.c,$(BUILD)/tests/%,$(UNIT_SRC))
+
+BENCH_SRC := $(wildcard bench/*.c)
+BENCH_BIN := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
+
+.PHONY: all deps check bench format format-check clean
+all: $(BUILD)/polydem
+
+DEB_PACKAGES := build-essential ocl-icd-opencl-dev opencl-c-headers pocl-opencl-icd clinfo \
+                clang-format
+deps:
+	@sh tools/install_deps.sh $(DEB_PACKAGES)
+
+$(CL_GEN): $(CL_SRC) $(CL_HDR) tools/embed_cl.sh
+	@mkdir -p $(dir $@)
+	sh tools/embed_cl.sh $(CL_SRC) > $@.tmp && mv $@.tmp $@
+
+$(BUILD)/engine/%.o: engine/%.c $(wildcard engine/*.h) $(CL_HDR) $(CL_GEN)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -c $< -o $@
+
+$(BUILD)/libpolydem.a: $(ENGINE_OBJ)
+	rm -f $@ && ar rcs $@ $^
+
+$(BUILD)/polydem: cli/polydem.c $(BUILD)/libpolydem.a
+	$(CC) $(CFLAGS) $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
+
+$(BUILD)/tests/%: tests/%.c tests/test.h $(BUILD)/libpolydem.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -Itests $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
+
+$(BUILD)/bench/%: bench/%.c $(BUILD)/libpolydem.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
+
+check: $(BUILD)/polydem $(UNIT_BIN)
+	@BUILD=$(BUILD) sh tests/run.sh $(UNIT_BIN)
+
+bench: $(BUILD)/polydem $(BENCH_BIN)
+	$(BUILD)/bench/overlap
+
+format:
+	clang-format -i engine/*.c engine/*.h kernels/*.h kernels/*.cl cli/*.c tests/*.h tests/*/*.c bench/*.c
+
+format-check:
+	@clang-format --dry-run -Werror engine/*.c engine/*.h kernels/*.h kernels/*.cl cli/*.c tests/*.h tests/*/*.c bench/*.c
+
+clean:
+	rm -rf build

@@ -1,0 +1,228 @@
+/*
+ * bench/overlap.c - nanoseconds per polyhedral overlap at realistic DEM overlaps (thesis figure
+ * 7.6 is the picture to compare with).
+ *
+ * For each shape it prepares NCONF random pairs (random orientations, random approach direction)
+ * placed by bisection so that the overlap depth is 1 % of the volume-equivalent diameter, then
+ * times the overlap kernel's own code on one host core (double precision, scratch preallocated as
+ * the engine will) with the half-plane filter on and off, and the OpenCL kernel on the default
+ * device for a batch of pairs (one work-item per pair, buffers and transfers included).
+ *
+ * usage: build/bench/overlap [--quick] [--no-opencl] [--markdown]
+ */
+#define PD_DOUBLE 1
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "overlap.h"
+#include "overlap_run.h"
+#include "polydem.h"
+
+#define NCONF 64
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+static uint64_t rng = 12345;
+static double rnd(void)
+{
+    uint64_t z = (rng += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return (double)((z ^ (z >> 31)) >> 11) / 9007199254740992.0;
+}
+static void rnd_unit(double *v, int n)
+{
+    double s;
+    do {
+        s = 0;
+        for (int k = 0; k < n; k++) {
+            v[k] = 2 * rnd() - 1;
+            s += v[k] * v[k];
+        }
+    } while (s < 0.01 || s > 1);
+    for (int k = 0; k < n; k++) v[k] /= sqrt(s);
+}
+
+typedef struct {
+    ovl_setup s[NCONF];
+    double depth[NCONF];
+} configs;
+
+/* Places NCONF pairs of m at 1 % depth. Returns the number placed. */
+static int make_configs(const pd_mesh *m, configs *cf)
+{
+    pd_mass_props mp;
+    pd_mesh_mass_props(m, &mp);
+    double D = cbrt(6 * mp.volume / 3.14159265358979323846), target = 0.01 * D;
+    int n = 0;
+    for (int tries = 0; n < NCONF && tries < 10 * NCONF; tries++) {
+        pd_pose pa = {{0, 0, 0}, {1, 0, 0, 0}}, pb;
+        double u[3];
+        rnd_unit(pa.q, 4);
+        rnd_unit(pb.q, 4);
+        rnd_unit(u, 3);
+        double lo = 0, hi = 4 * D; /* depth(lo) > target >= depth(hi) */
+        pd_contact c;
+        for (int it = 0; it < 50; it++) {
+            double mid = 0.5 * (lo + hi);
+            for (int k = 0; k < 3; k++) pb.x[k] = mid * u[k];
+            pd_overlap_host(m, &pa, m, &pb, 0, &c, NULL);
+            if (c.hit && c.depth > target)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        for (int k = 0; k < 3; k++) pb.x[k] = lo * u[k];
+        pd_overlap_host(m, &pa, m, &pb, 0, &c, NULL);
+        if (!c.hit || fabs(c.depth - target) > 0.1 * target) continue;
+        if (ovl_setup_make(m, &pa, m, &pb, 0, &cf->s[n], NULL) != PD_OK) continue;
+        cf->depth[n++] = c.depth / D;
+    }
+    return n;
+}
+
+/* Host timing: ns per overlap over all configs, repeated for at least min_time seconds. */
+static double time_host(configs *cf, int n, int flags, double min_time, double *kept)
+{
+    ovl_setup *s0 = &cf->s[0];
+    int cap = ovl_pts_cap(s0->nta, s0->ntb);
+    int *iscr = malloc(sizeof(int) * ovl_iscratch_len(s0->nta, s0->ntb, s0->nva, s0->nvb));
+    double *rscr = malloc(sizeof(double) * ovl_rscratch_len(s0->nva, s0->nvb, cap));
+    ovl_in in[NCONF];
+    for (int i = 0; i < n; i++) {
+        ovl_setup *s = &cf->s[i];
+        in[i].va = s->va;
+        in[i].ta = s->ta;
+        in[i].nva = s->nva;
+        in[i].nta = s->nta;
+        in[i].vb = s->vb;
+        in[i].tb = s->tb;
+        in[i].nvb = s->nvb;
+        in[i].ntb = s->ntb;
+        memcpy(in[i].rot, s->rot, sizeof s->rot);
+        memcpy(in[i].tr, s->tr, sizeof s->tr);
+        in[i].ca = v3(s->ca[0], s->ca[1], s->ca[2]);
+        in[i].cb = v3(s->cb[0], s->cb[1], s->cb[2]);
+        in[i].vol_a = s->vol_a;
+        in[i].vol_b = s->vol_b;
+        in[i].flags = flags;
+        in[i].iscr = iscr;
+        in[i].rscr = rscr;
+        in[i].pts_cap = cap;
+    }
+    long reps = 0;
+    double t0 = now(), t, sink = 0, kept_sum = 0;
+    do {
+        for (int i = 0; i < n; i++) {
+            ovl_out o;
+            ovl_compute(&in[i], &o);
+            sink += o.volume;
+            kept_sum += o.kept_a + o.kept_b;
+        }
+        reps++;
+        t = now() - t0;
+    } while (t < min_time);
+    if (sink < 0) printf(" ");
+    *kept = kept_sum / (reps * n);
+    free(iscr);
+    free(rscr);
+    return 1e9 * t / (reps * (double)n);
+}
+
+/* OpenCL timing: ns per overlap for a batch of `batch` pairs cycling through the configs. */
+static double time_cl(pd_device *dev, configs *cf, int n, int dbl, int batch, double min_time)
+{
+    double *xf = malloc(sizeof(double) * 18 * batch), *out = malloc(sizeof(double) * 12 * batch);
+    for (int i = 0; i < batch; i++) ovl_setup_pack(&cf->s[i % n], xf + 18 * i);
+    pd_error err = {0};
+    /* warm-up: compiles the program */
+    if (ovl_run_cl(dev, &cf->s[0], xf, batch, dbl, out, &err) != PD_OK) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        free(xf);
+        free(out);
+        return -1;
+    }
+    long reps = 0;
+    double t0 = now(), t;
+    do {
+        ovl_run_cl(dev, &cf->s[0], xf, batch, dbl, out, &err);
+        reps++;
+        t = now() - t0;
+    } while (t < min_time);
+    free(xf);
+    free(out);
+    return 1e9 * t / (reps * (double)batch);
+}
+
+int main(int argc, char **argv)
+{
+    int quick = 0, use_cl = 1;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--quick"))
+            quick = 1;
+        else if (!strcmp(argv[i], "--no-opencl"))
+            use_cl = 0;
+        else {
+            fprintf(stderr, "usage: %s [--quick] [--no-opencl]\n", argv[0]);
+            return 2;
+        }
+    }
+    double min_time = quick ? 0.1 : 1.0;
+    struct {
+        const char *name;
+        int tris;
+    } shapes[] = {{"schonhardt", 0}, {"icosphere", 80}, {"icosphere", 320}, {"icosphere", 1280}};
+    pd_device *dev = NULL;
+    pd_error err = {0};
+    if (use_cl && pd_device_open(-1, &dev, &err) != PD_OK) {
+        fprintf(stderr, "bench: no OpenCL device (%s); host only\n", err.msg);
+        use_cl = 0;
+    }
+    printf("# polydem overlap benchmark: pairs at depth 1%% of the volume-equivalent diameter\n");
+    printf("# host: one core, double precision, ovl_compute with preallocated scratch\n");
+    if (use_cl) printf("# opencl: %s, batch of 4096 pairs, transfers included\n", pd_device_name(dev));
+    printf("| shape | triangles | kept tris/pair (filter) | host ns, filter on | host ns, filter off "
+           "| opencl ns double | opencl ns single |\n");
+    printf("|---|---|---|---|---|---|---|\n");
+    static configs cf;
+    double t80 = 0, t1280 = 0;
+    for (size_t k = 0; k < sizeof shapes / sizeof shapes[0]; k++) {
+        pd_mesh *m = NULL;
+        if (pd_mesh_builtin(shapes[k].name, shapes[k].tris, 1, &m, &err) != PD_OK) {
+            fprintf(stderr, "bench: %s\n", err.msg);
+            return 1;
+        }
+        int n = make_configs(m, &cf);
+        if (n == 0) {
+            fprintf(stderr, "bench: could not place %s pairs\n", shapes[k].name);
+            return 1;
+        }
+        double kept_on, kept_off;
+        double on = time_host(&cf, n, 0, min_time, &kept_on);
+        double off = time_host(&cf, n, OVL_NO_FILTER, min_time, &kept_off);
+        double cld = -1, clf = -1;
+        if (use_cl) {
+            if (pd_device_has_fp64(dev)) cld = time_cl(dev, &cf, n, 1, 4096, min_time);
+            clf = time_cl(dev, &cf, n, 0, 4096, min_time);
+        }
+        printf("| %s | %d | %.1f | %.0f | %.0f | ", shapes[k].name, m->ntris, kept_on, on, off);
+        if (cld > 0) printf("%.0f | ", cld); else printf("- | ");
+        if (clf > 0) printf("%.0f |\n", clf); else printf("- |\n");
+        fflush(stdout);
+        if (shapes[k].tris == 80) t80 = on;
+        if (shapes[k].tris == 1280) t1280 = on;
+        for (int i = 0; i < n; i++) ovl_setup_free(&cf.s[i]);
+        pd_mesh_destroy(m);
+    }
+    printf("\nicosphere 1280 / 80 host time ratio (filter on): %.2f\n", t1280 / t80);
+    pd_device_close(dev);
+    return 0;
+}

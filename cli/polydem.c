@@ -1,0 +1,206 @@
+/*
+ * polydem.c - the command-line front end of the engine.
+ *
+ *   polydem overlap A B --pose-a "x y z qw qx qy qz" --pose-b "..." [--opencl] [--single]
+ *                       [--no-filter] [--device N]
+ *   polydem mesh-info FILE|builtin:NAME[:TRIANGLES[:SEED]]
+ *
+ * Output is one JSON object on stdout, SI units, full double precision. Bad arguments or meshes
+ * print a message on stderr and exit 2.
+ */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "polydem.h"
+
+#define EXIT_USAGE 2
+
+static const char *usage_text =
+    "usage: polydem <command> [options]\n"
+    "\n"
+    "commands:\n"
+    "  overlap A B [--pose-a \"x y z qw qx qy qz\"] [--pose-b \"...\"] [--opencl] [--single]\n"
+    "              [--no-filter] [--device N]\n"
+    "      exact overlap of two closed meshes (STL, OBJ or builtin:NAME); prints\n"
+    "      {\"volume\": m^3, \"centroid\": [m], \"normal\": [unit, A into B], \"depth\": m}\n"
+    "      or {\"volume\": 0} when they do not overlap. Poses default to \"0 0 0 1 0 0 0\".\n"
+    "  mesh-info FILE|builtin:NAME[:TRIANGLES[:SEED]]\n"
+    "      triangles, vertices, volume, centroid, inertia and principal moments\n"
+    "      (inertia per unit density, m^5 = kg m^2 at 1 kg/m^3)\n"
+    "\n"
+    "builtin shapes: cube, tetrahedron, schonhardt, icosphere[:20|80|320|1280|5120],\n"
+    "                rock[:TRIANGLES[:SEED]]\n";
+
+static int fail(const char *fmt, const char *a, const char *b)
+{
+    fprintf(stderr, "polydem: ");
+    fprintf(stderr, fmt, a, b);
+    fprintf(stderr, "\n");
+    return EXIT_USAGE;
+}
+
+/* Parses exactly n finite numbers separated by blanks or commas. */
+static int parse_numbers(const char *s, double *out, int n)
+{
+    const char *p = s;
+    for (int i = 0; i < n; i++) {
+        while (*p == ' ' || *p == '\t' || *p == ',') p++;
+        char *end;
+        errno = 0;
+        out[i] = strtod(p, &end);
+        if (end == p || errno == ERANGE || !isfinite(out[i])) return -1;
+        p = end;
+    }
+    while (*p == ' ' || *p == '\t' || *p == ',') p++;
+    return *p ? -1 : 0;
+}
+
+static int parse_pose(const char *flag, const char *s, pd_pose *pose)
+{
+    double v[7];
+    if (parse_numbers(s, v, 7) != 0)
+        return fail("%s: expected 7 numbers \"x y z qw qx qy qz\", got \"%s\"", flag, s);
+    double qn = sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
+    if (!(qn > 0) || !isfinite(qn))
+        return fail("%s: quaternion \"%s\" has zero length", flag, s);
+    for (int k = 0; k < 3; k++) pose->x[k] = v[k];
+    for (int k = 0; k < 4; k++) pose->q[k] = v[3 + k] / qn;
+    return 0;
+}
+
+static void print_vec(const char *key, const double *v, int last)
+{
+    printf("\"%s\": [%.17g, %.17g, %.17g]%s", key, v[0], v[1], v[2], last ? "" : ", ");
+}
+
+static int cmd_overlap(int argc, char **argv)
+{
+    const char *files[2] = {NULL, NULL};
+    int nfiles = 0, use_cl = 0, flags = 0, device = -1;
+    pd_pose pose[2] = {{{0, 0, 0}, {1, 0, 0, 0}}, {{0, 0, 0}, {1, 0, 0, 0}}};
+    for (int i = 2; i < argc; i++) {
+        const char *a = argv[i];
+        if (!strcmp(a, "--pose-a") || !strcmp(a, "--pose-b")) {
+            if (i + 1 >= argc) return fail("%s: missing value%s", a, "");
+            if (parse_pose(a, argv[++i], &pose[a[7] == 'b'])) return EXIT_USAGE;
+        } else if (!strcmp(a, "--opencl")) {
+            use_cl = 1;
+        } else if (!strcmp(a, "--single")) {
+            flags |= PD_OVERLAP_SINGLE;
+        } else if (!strcmp(a, "--no-filter")) {
+            flags |= PD_OVERLAP_NO_FILTER;
+        } else if (!strcmp(a, "--device")) {
+            char *end;
+            if (i + 1 >= argc) return fail("%s: missing value%s", a, "");
+            device = (int)strtol(argv[++i], &end, 10);
+            if (*end || device < 0) return fail("--device: expected a device index, got \"%s\"%s", argv[i], "");
+        } else if (a[0] == '-' && a[1]) {
+            return fail("overlap: unknown option \"%s\"%s", a, "");
+        } else if (nfiles < 2) {
+            files[nfiles++] = a;
+        } else {
+            return fail("overlap: unexpected argument \"%s\" (two meshes expected)%s", a, "");
+        }
+    }
+    if (nfiles != 2) return fail("overlap: two meshes expected, A and B%s%s", "", "");
+
+    pd_error err = {0};
+    pd_mesh *m[2] = {NULL, NULL};
+    pd_device *dev = NULL;
+    pd_contact c;
+    int rc = EXIT_USAGE;
+    for (int k = 0; k < 2; k++)
+        if (pd_mesh_open(files[k], &m[k], &err) != PD_OK) {
+            fprintf(stderr, "polydem: %s\n", err.msg);
+            goto done;
+        }
+    if (use_cl) {
+        if (pd_device_open(device, &dev, &err) != PD_OK ||
+            pd_overlap_cl(dev, m[0], &pose[0], m[1], &pose[1], flags, &c, &err) != PD_OK) {
+            fprintf(stderr, "polydem: %s\n", err.msg);
+            rc = 1;
+            goto done;
+        }
+    } else if (pd_overlap_host(m[0], &pose[0], m[1], &pose[1], flags, &c, &err) != PD_OK) {
+        fprintf(stderr, "polydem: %s\n", err.msg);
+        rc = 1;
+        goto done;
+    }
+    if (!c.hit) {
+        printf("{\"volume\": 0}\n");
+    } else {
+        printf("{\"volume\": %.17g, ", c.volume);
+        print_vec("centroid", c.centroid, 0);
+        print_vec("normal", c.normal, 0);
+        printf("\"depth\": %.17g}\n", c.depth);
+    }
+    rc = 0;
+done:
+    pd_device_close(dev);
+    pd_mesh_destroy(m[0]);
+    pd_mesh_destroy(m[1]);
+    return rc;
+}
+
+static int cmd_mesh_info(int argc, char **argv)
+{
+    if (argc != 3) return fail("mesh-info: exactly one mesh expected (FILE or builtin:NAME)%s%s", "", "");
+    pd_error err = {0};
+    pd_mesh *m = NULL;
+    if (pd_mesh_open(argv[2], &m, &err) != PD_OK) {
+        fprintf(stderr, "polydem: %s\n", err.msg);
+        return EXIT_USAGE;
+    }
+    pd_mass_props mp;
+    pd_mesh_mass_props(m, &mp);
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; k++) lo[k] = hi[k] = m->verts[k];
+    for (int i = 0; i < m->nverts; i++)
+        for (int k = 0; k < 3; k++) {
+            double v = m->verts[3 * i + k];
+            lo[k] = v < lo[k] ? v : lo[k];
+            hi[k] = v > hi[k] ? v : hi[k];
+        }
+    printf("{\"mesh\": \"%s\", \"triangles\": %d, \"vertices\": %d, \"closed\": true, ", argv[2],
+           m->ntris, m->nverts);
+    printf("\"volume\": %.17g, ", mp.volume);
+    printf("\"equivalent_diameter\": %.17g, ", cbrt(6.0 * mp.volume / 3.14159265358979323846));
+    print_vec("centroid", mp.centroid, 0);
+    printf("\"inertia\": [");
+    for (int i = 0; i < 3; i++) {
+        printf("[%.17g, %.17g, %.17g]%s", mp.inertia[i][0], mp.inertia[i][1], mp.inertia[i][2],
+               i < 2 ? ", " : "");
+    }
+    printf("], ");
+    print_vec("principal_moments", mp.principal, 0);
+    printf("\"principal_axes\": [");
+    for (int i = 0; i < 3; i++)
+        printf("[%.17g, %.17g, %.17g]%s", mp.axes[i][0], mp.axes[i][1], mp.axes[i][2],
+               i < 2 ? ", " : "");
+    printf("], ");
+    print_vec("bbox_min", lo, 0);
+    print_vec("bbox_max", hi, 0);
+    printf("\"units\": {\"volume\": \"m^3\", \"centroid\": \"m\", \"equivalent_diameter\": \"m\", "
+           "\"inertia\": \"kg m^2 at density 1 kg/m^3\"}}\n");
+    pd_mesh_destroy(m);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    if (argc < 2) {
+        fputs(usage_text, stderr);
+        return EXIT_USAGE;
+    }
+    if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") || !strcmp(argv[1], "help")) {
+        fputs(usage_text, stdout);
+        return 0;
+    }
+    if (!strcmp(argv[1], "overlap")) return cmd_overlap(argc, argv);
+    if (!strcmp(argv[1], "mesh-info")) return cmd_mesh_info(argc, argv);
+    fprintf(stderr, "polydem: unknown command \"%s\"\n\n%s", argv[1], usage_text);
+    return EXIT_USAGE;
+}

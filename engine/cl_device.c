@@ -1,0 +1,297 @@
+/*
+ * cl_device.c - an OpenCL device with the polydem kernels compiled for it (pd_device_*), and the
+ * overlap kernel's host side (ovl_run_cl, pd_overlap_cl).
+ *
+ * The kernel sources are embedded at build time (tools/embed_cl.sh), so the binaries run from any
+ * directory. Programs are compiled once per precision, on first use, and kept for the device's life.
+ */
+#define CL_TARGET_OPENCL_VERSION 120
+#include <CL/cl.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cl_sources.h"
+#include "overlap_run.h"
+
+struct pd_device {
+    cl_platform_id platform;
+    cl_device_id device;
+    cl_context ctx;
+    cl_command_queue queue;
+    cl_program prog[2]; /* [0] single, [1] double */
+    cl_kernel k_overlap[2];
+    int fp64;
+    char name[256];
+};
+
+static const char *cl_errstr(cl_int e)
+{
+    switch (e) {
+    case CL_DEVICE_NOT_FOUND: return "CL_DEVICE_NOT_FOUND";
+    case CL_OUT_OF_RESOURCES: return "CL_OUT_OF_RESOURCES";
+    case CL_OUT_OF_HOST_MEMORY: return "CL_OUT_OF_HOST_MEMORY";
+    case CL_MEM_OBJECT_ALLOCATION_FAILURE: return "CL_MEM_OBJECT_ALLOCATION_FAILURE";
+    case CL_BUILD_PROGRAM_FAILURE: return "CL_BUILD_PROGRAM_FAILURE";
+    case CL_INVALID_VALUE: return "CL_INVALID_VALUE";
+    case CL_INVALID_BUFFER_SIZE: return "CL_INVALID_BUFFER_SIZE";
+    case CL_INVALID_KERNEL_ARGS: return "CL_INVALID_KERNEL_ARGS";
+    case CL_INVALID_WORK_GROUP_SIZE: return "CL_INVALID_WORK_GROUP_SIZE";
+    case -1001: return "CL_PLATFORM_NOT_FOUND_KHR (no OpenCL driver installed)";
+    default: return "OpenCL error";
+    }
+}
+
+#define CL_FAIL(err, what, e)                                                                      \
+    pd_error_set(err, PD_ECL, "opencl: %s failed: %s (%d)", what, cl_errstr(e), (int)(e))
+
+int pd_device_open(int index, pd_device **out, pd_error *err)
+{
+    cl_platform_id plats[16];
+    cl_uint nplat = 0;
+    cl_int e = clGetPlatformIDs(16, plats, &nplat);
+    *out = NULL;
+    if (e != CL_SUCCESS || nplat == 0)
+        return pd_error_set(err, PD_ECL, "opencl: no platform found (%s); install an OpenCL "
+                                         "driver, e.g. pocl-opencl-icd",
+                            cl_errstr(e));
+    /* Enumerate every device of every platform in order. */
+    cl_platform_id pick_plat = NULL;
+    cl_device_id pick = NULL, first = NULL, first_gpu = NULL;
+    cl_platform_id first_plat = NULL, gpu_plat = NULL;
+    int seen = 0;
+    for (cl_uint p = 0; p < nplat && p < 16; p++) {
+        cl_device_id devs[32];
+        cl_uint ndev = 0;
+        if (clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, 32, devs, &ndev) != CL_SUCCESS) continue;
+        for (cl_uint d = 0; d < ndev && d < 32; d++, seen++) {
+            cl_device_type type = 0;
+            clGetDeviceInfo(devs[d], CL_DEVICE_TYPE, sizeof type, &type, NULL);
+            if (!first) {
+                first = devs[d];
+                first_plat = plats[p];
+            }
+            if (!first_gpu && (type & CL_DEVICE_TYPE_GPU)) {
+                first_gpu = devs[d];
+                gpu_plat = plats[p];
+            }
+            if (seen == index) {
+                pick = devs[d];
+                pick_plat = plats[p];
+            }
+        }
+    }
+    if (index < 0) {
+        pick = first_gpu ? first_gpu : first;
+        pick_plat = first_gpu ? gpu_plat : first_plat;
+    }
+    if (!pick) {
+        if (index >= 0)
+            return pd_error_set(err, PD_EINVAL, "opencl: device %d does not exist (%d found)",
+                                index, seen);
+        return pd_error_set(err, PD_ECL, "opencl: no device found");
+    }
+    pd_device *dev = calloc(1, sizeof *dev);
+    if (!dev) return pd_error_set(err, PD_ENOMEM, "opencl: out of memory");
+    dev->platform = pick_plat;
+    dev->device = pick;
+    clGetDeviceInfo(pick, CL_DEVICE_NAME, sizeof dev->name - 1, dev->name, NULL);
+    char ext[8192] = {0};
+    clGetDeviceInfo(pick, CL_DEVICE_EXTENSIONS, sizeof ext - 1, ext, NULL);
+    dev->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
+    dev->ctx = clCreateContext(NULL, 1, &pick, NULL, NULL, &e);
+    if (e != CL_SUCCESS) {
+        free(dev);
+        return CL_FAIL(err, "clCreateContext", e);
+    }
+    dev->queue = clCreateCommandQueue(dev->ctx, pick, 0, &e);
+    if (e != CL_SUCCESS) {
+        clReleaseContext(dev->ctx);
+        free(dev);
+        return CL_FAIL(err, "clCreateCommandQueue", e);
+    }
+    *out = dev;
+    return PD_OK;
+}
+
+void pd_device_close(pd_device *dev)
+{
+    if (!dev) return;
+    for (int i = 0; i < 2; i++) {
+        if (dev->k_overlap[i]) clReleaseKernel(dev->k_overlap[i]);
+        if (dev->prog[i]) clReleaseProgram(dev->prog[i]);
+    }
+    clReleaseCommandQueue(dev->queue);
+    clReleaseContext(dev->ctx);
+    free(dev);
+}
+
+const char *pd_device_name(const pd_device *dev) { return dev->name; }
+int pd_device_has_fp64(const pd_device *dev) { return dev->fp64; }
+
+/* Compiles the overlap program for one precision on first use. */
+static int device_program(pd_device *dev, int dbl, pd_error *err)
+{
+    if (dev->k_overlap[dbl]) return PD_OK;
+    if (dbl && !dev->fp64)
+        return pd_error_set(err, PD_ECL,
+                            "opencl: device '%s' has no cl_khr_fp64; use single precision",
+                            dev->name);
+    const char *src = pd_cl_source_overlap;
+    cl_int e;
+    cl_program prog = clCreateProgramWithSource(dev->ctx, 1, &src, NULL, &e);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateProgramWithSource", e);
+    const char *opts = dbl ? "-DPD_DOUBLE=1" : "-DPD_DOUBLE=0";
+    e = clBuildProgram(prog, 1, &dev->device, opts, NULL, NULL);
+    if (e != CL_SUCCESS) {
+        char log[4096] = {0};
+        clGetProgramBuildInfo(prog, dev->device, CL_PROGRAM_BUILD_LOG, sizeof log - 1, log, NULL);
+        clReleaseProgram(prog);
+        return pd_error_set(err, PD_ECL, "opencl: building overlap.cl (%s) failed: %.400s",
+                            dbl ? "double" : "single", log);
+    }
+    cl_kernel k = clCreateKernel(prog, "overlap_pairs", &e);
+    if (e != CL_SUCCESS) {
+        clReleaseProgram(prog);
+        return CL_FAIL(err, "clCreateKernel(overlap_pairs)", e);
+    }
+    dev->prog[dbl] = prog;
+    dev->k_overlap[dbl] = k;
+    return PD_OK;
+}
+
+/* Converts n doubles into the device's scalar type in buf (sizeof scalar = sz). */
+static void to_real(void *buf, const double *x, size_t n, int dbl)
+{
+    if (dbl)
+        memcpy(buf, x, n * sizeof(double));
+    else
+        for (size_t i = 0; i < n; i++) ((float *)buf)[i] = (float)x[i];
+}
+
+int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs, int dbl,
+               double *out, pd_error *err)
+{
+    int rc = device_program(dev, dbl, err);
+    if (rc != PD_OK) return rc;
+    size_t rs = dbl ? sizeof(double) : sizeof(float);
+    int cap = ovl_pts_cap(s->nta, s->ntb);
+    size_t ilen = (size_t)(s->nta + s->ntb + s->nva + s->nvb);
+    size_t rlen = (size_t)(s->nva + s->nvb + 3 * s->nvb + 3 * cap);
+    size_t n_va = 3 * (size_t)s->nva, n_vb = 3 * (size_t)s->nvb, n_xf = 18 * (size_t)npairs;
+    void *hva = malloc(rs * n_va), *hvb = malloc(rs * n_vb), *hxf = malloc(rs * n_xf);
+    void *hout = malloc(rs * 12 * (size_t)npairs);
+    cl_mem b[8] = {0};
+    cl_int e = CL_SUCCESS;
+    rc = PD_OK;
+    if (!hva || !hvb || !hxf || !hout) {
+        rc = pd_error_set(err, PD_ENOMEM, "opencl overlap: out of memory");
+        goto done;
+    }
+    to_real(hva, s->va, n_va, dbl);
+    to_real(hvb, s->vb, n_vb, dbl);
+    to_real(hxf, xf, n_xf, dbl);
+    const cl_mem_flags ro = CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR;
+    b[0] = clCreateBuffer(dev->ctx, ro, rs * n_va, hva, &e);
+    if (e == CL_SUCCESS) b[1] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->nta, (void *)s->ta, &e);
+    if (e == CL_SUCCESS) b[2] = clCreateBuffer(dev->ctx, ro, rs * n_vb, hvb, &e);
+    if (e == CL_SUCCESS) b[3] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->ntb, (void *)s->tb, &e);
+    if (e == CL_SUCCESS) b[4] = clCreateBuffer(dev->ctx, ro, rs * n_xf, hxf, &e);
+    if (e == CL_SUCCESS)
+        b[5] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);
+    if (e == CL_SUCCESS)
+        b[6] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, rs * rlen * npairs, NULL, &e);
+    if (e == CL_SUCCESS)
+        b[7] = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * 12 * npairs, NULL, &e);
+    if (e != CL_SUCCESS) {
+        rc = CL_FAIL(err, "clCreateBuffer", e);
+        goto done;
+    }
+    cl_kernel k = dev->k_overlap[dbl];
+    double vold[2] = {s->vol_a, s->vol_b};
+    float volf[2] = {(float)s->vol_a, (float)s->vol_b};
+    cl_int args_e = CL_SUCCESS;
+    int ai = 0;
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[0]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[1]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->nva);
+    args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->nta);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[2]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[3]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->nvb);
+    args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->ntb);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[4]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(int), &npairs);
+    args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->flags);
+    args_e |= clSetKernelArg(k, ai++, rs, dbl ? (void *)&vold[0] : (void *)&volf[0]);
+    args_e |= clSetKernelArg(k, ai++, rs, dbl ? (void *)&vold[1] : (void *)&volf[1]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[5]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[6]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(int), &cap);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[7]);
+    if (args_e != CL_SUCCESS) {
+        rc = pd_error_set(err, PD_ECL, "opencl: setting overlap_pairs arguments failed");
+        goto done;
+    }
+    size_t global = (size_t)npairs;
+    e = clEnqueueNDRangeKernel(dev->queue, k, 1, NULL, &global, NULL, 0, NULL, NULL);
+    if (e != CL_SUCCESS) {
+        rc = CL_FAIL(err, "clEnqueueNDRangeKernel(overlap_pairs)", e);
+        goto done;
+    }
+    e = clEnqueueReadBuffer(dev->queue, b[7], CL_TRUE, 0, rs * 12 * npairs, hout, 0, NULL, NULL);
+    if (e != CL_SUCCESS) {
+        rc = CL_FAIL(err, "clEnqueueReadBuffer", e);
+        goto done;
+    }
+    for (size_t i = 0; i < 12 * (size_t)npairs; i++)
+        out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
+done:
+    for (int i = 0; i < 8; i++)
+        if (b[i]) clReleaseMemObject(b[i]);
+    free(hva);
+    free(hvb);
+    free(hxf);
+    free(hout);
+    return rc;
+}
+
+/* Packs a setup's transform into the kernel's 18-real per-pair record. */
+void ovl_setup_pack(const ovl_setup *s, double xf[18])
+{
+    memcpy(xf, s->rot, 9 * sizeof(double));
+    memcpy(xf + 9, s->tr, 3 * sizeof(double));
+    memcpy(xf + 12, s->ca, 3 * sizeof(double));
+    memcpy(xf + 15, s->cb, 3 * sizeof(double));
+}
+
+void ovl_result_unpack(const double r[12], ovl_result *o)
+{
+    o->hit = r[0] != 0;
+    o->degenerate = r[1] != 0;
+    o->kept_a = (int)r[2];
+    o->kept_b = (int)r[3];
+    o->volume = r[4];
+    for (int k = 0; k < 3; k++) {
+        o->centroid[k] = r[5 + k];
+        o->normal[k] = r[8 + k];
+    }
+    o->depth = r[11];
+}
+
+int pd_overlap_cl(pd_device *dev, const pd_mesh *a, const pd_pose *pa, const pd_mesh *b,
+                  const pd_pose *pb, int flags, pd_contact *out, pd_error *err)
+{
+    ovl_setup s;
+    double xf[18], r[12];
+    ovl_result res;
+    int rc = ovl_setup_make(a, pa, b, pb, flags & ~PD_OVERLAP_SINGLE, &s, err);
+    if (rc != PD_OK) return rc;
+    ovl_setup_pack(&s, xf);
+    rc = ovl_run_cl(dev, &s, xf, 1, !(flags & PD_OVERLAP_SINGLE), r, err);
+    if (rc == PD_OK) {
+        ovl_result_unpack(r, &res);
+        ovl_result_to_world(&s, &res, out);
+    }
+    ovl_setup_free(&s);
+    return rc;
+}

@@ -1,0 +1,60 @@
+/*
+ * overlap_run.h - engine-internal glue between meshes and poses (doubles) and the overlap kernel
+ * of kernels/overlap.h, which is compiled once per precision (overlap_f32.c, overlap_f64.c) on the
+ * host and once per precision on each OpenCL device (cl_device.c).
+ */
+#ifndef PD_OVERLAP_RUN_H
+#define PD_OVERLAP_RUN_H
+
+#include "polydem.h"
+
+/* One overlap problem in A's frame, in doubles: what the kernel's ovl_in holds. */
+typedef struct ovl_setup {
+    double *va; /* A's vertices in A's frame (owned: ovl_setup_free) */
+    const int *ta;
+    int nva, nta;
+    const double *vb; /* B's vertices in B's mesh frame */
+    const int *tb;
+    int nvb, ntb;
+    double rot[9], tr[3]; /* B's frame -> A's frame */
+    double ca[3], cb[3];  /* centroids in A's frame */
+    double vol_a, vol_b;
+    int flags;
+    /* A's frame -> world: world = ra * (p + ca_mesh) + xa */
+    double ra[3][3], ca_mesh[3], xa[3];
+} ovl_setup;
+
+typedef struct ovl_result {
+    int hit, degenerate, kept_a, kept_b;
+    double volume, centroid[3], normal[3], depth;
+} ovl_result;
+
+/* Runs the host build of the kernel. Returns PD_OK or PD_ENOMEM. */
+int ovl_run_f64(const ovl_setup *s, ovl_result *r);
+int ovl_run_f32(const ovl_setup *s, ovl_result *r);
+
+/* Capacity of the node buffer used for the depth; larger overlaps recompute instead. */
+int ovl_pts_cap(int nta, int ntb);
+
+/*
+ * Sets up the overlap of A at pa with B at pb: A's frame is A's mesh frame shifted to A's centroid
+ * (figure 5.4), B is mapped into it. Returns PD_OK, PD_EINVAL (bad quaternion) or PD_ENOMEM.
+ */
+int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const pd_pose *pb,
+                   int flags, ovl_setup *s, pd_error *err);
+void ovl_setup_free(ovl_setup *s);
+
+/* Converts a result in A's frame into a world-frame pd_contact. */
+void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *out);
+
+/*
+ * Runs the OpenCL kernel for npairs placements of B against A (cl_device.c): xf holds 18 doubles
+ * per pair (rot, tr, ca, cb as in ovl_setup; see ovl_setup_pack), out receives 12 per pair
+ * (see ovl_result_unpack). dbl selects the double-precision program.
+ */
+int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs, int dbl,
+               double *out, pd_error *err);
+void ovl_setup_pack(const ovl_setup *s, double xf[18]);
+void ovl_result_unpack(const double r[12], ovl_result *o);
+
+#endif

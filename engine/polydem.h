@@ -1,0 +1,160 @@
+/*
+ * polydem.h - the public engine API: everything the CLI and the daemon may touch.
+ *
+ * Conventions (see ../shared/STYLE.md): every call that can fail returns 0 on success or a negative
+ * PD_E* code and fills a pd_error whose message names the thing and what is wrong. Library code
+ * never exits. Objects follow create -> use -> destroy; destroy accepts NULL.
+ *
+ * Units are SI throughout: metres, kilograms, seconds.
+ */
+#ifndef POLYDEM_H
+#define POLYDEM_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- errors ------------------------------------------------------------------------------ */
+
+enum {
+    PD_OK = 0,
+    PD_EINVAL = -1, /* bad argument or bad input data */
+    PD_EIO = -2,    /* file could not be read or written */
+    PD_EMESH = -3,  /* mesh failed validation */
+    PD_ENOMEM = -4, /* allocation failed */
+    PD_ECL = -5,    /* OpenCL failure */
+};
+
+typedef struct pd_error {
+    int code;
+    char msg[512];
+} pd_error;
+
+/* Fills err (when non-NULL) with code and a printf-style message; returns code. */
+int pd_error_set(pd_error *err, int code, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
+/* ---- meshes (engine/mesh.c, engine/mesh_io.c, engine/mesh_builtin.c) ------------------------- */
+
+/*
+ * A closed, edge-manifold, consistently outward-oriented triangle mesh. Triangles are
+ * counter-clockwise seen from outside, so (v1-v0)x(v2-v0) is the outward normal.
+ */
+typedef struct pd_mesh {
+    int nverts;
+    int ntris;
+    double *verts; /* 3*nverts coordinates, m */
+    int *tris;     /* 3*ntris vertex indices */
+} pd_mesh;
+
+/* Mass properties of the solid bounded by a mesh, for unit density. */
+typedef struct pd_mass_props {
+    double volume;        /* m^3 */
+    double centroid[3];   /* m */
+    double inertia[3][3]; /* about the centroid, per unit density, m^5 */
+    double principal[3];  /* principal moments, ascending, m^5 */
+    double axes[3][3];    /* axes[i] is the unit principal axis of principal[i]; right-handed */
+} pd_mass_props;
+
+/*
+ * Loads "builtin:NAME[:TRIANGLES[:SEED]]" or a file (binary or ASCII STL, Wavefront OBJ). Welds
+ * coincident vertices, validates (closed, edge-manifold, consistently oriented, no zero-area
+ * triangles, positive volume) and silently flips an inward-oriented mesh. Errors name the file
+ * and the defect.
+ */
+int pd_mesh_open(const char *spec, pd_mesh **out, pd_error *err);
+
+/* Loads a mesh file only (no builtin: prefix). */
+int pd_mesh_load(const char *path, pd_mesh **out, pd_error *err);
+
+/*
+ * Built-in shapes generated in code:
+ *   "cube"        unit cube centred at the origin, axis-aligned (12 triangles)
+ *   "tetrahedron" regular, vertices (1,1,1),(1,-1,-1),(-1,1,-1),(-1,-1,1) (4 triangles)
+ *   "schonhardt"  the non-convex twisted triangular prism of thesis figure 7.2 (8 triangles)
+ *   "icosphere"   unit-circumradius subdivided icosahedron; triangles 20, 80, 320, 1280, 5120
+ *   "rock"        seeded, non-convex, star-shaped irregular particle; any even triangle count >= 20
+ * triangles <= 0 picks the default (icosphere 80, rock 80); seed is used by "rock" only.
+ */
+int pd_mesh_builtin(const char *name, int triangles, unsigned seed, pd_mesh **out, pd_error *err);
+
+/*
+ * Builds a mesh from arrays (copied), welds and validates it as pd_mesh_load does; label names
+ * the source in error messages.
+ */
+int pd_mesh_from_arrays(const double *verts, int nverts, const int *tris, int ntris,
+                        const char *label, pd_mesh **out, pd_error *err);
+
+void pd_mesh_destroy(pd_mesh *m);
+
+/* Writes binary STL. */
+int pd_mesh_write_stl(const pd_mesh *m, const char *path, pd_error *err);
+
+/* Exact mass properties (divergence theorem over the triangles). */
+void pd_mesh_mass_props(const pd_mesh *m, pd_mass_props *mp);
+
+/*
+ * Moves the mesh into its body frame: centroid at the origin, principal axes along x, y, z.
+ * Where principal moments coincide (relative difference < 1e-9) the mesh's own axes are kept
+ * in that eigenspace, so a cube stays axis-aligned. On return rot[i][j] is the rotation with
+ * v_body = rot * (v - centroid); mp (if non-NULL) is updated to the body-frame properties.
+ */
+void pd_mesh_to_body_frame(pd_mesh *m, pd_mass_props *mp, double rot[3][3]);
+
+/* ---- rigid poses ---------------------------------------------------------------------------- */
+
+/* world = R(q) v + x; q = (w, x, y, z), normalised by the functions that take it. */
+typedef struct pd_pose {
+    double x[3];
+    double q[4];
+} pd_pose;
+
+/* Rotation matrix of a quaternion (normalised first). Returns PD_EINVAL for a zero quaternion. */
+int pd_quat_to_matrix(const double q[4], double r[3][3]);
+
+/* ---- overlap of two polyhedra (kernels/overlap.h, thesis sections 4.2, 5.2, 5.3) ------------- */
+
+enum {
+    PD_OVERLAP_SINGLE = 1,    /* compute in single precision */
+    PD_OVERLAP_NO_FILTER = 2, /* skip the half-plane triangle filter (eqs. 5.3-5.5) */
+};
+
+/* One contact between A and B, in world coordinates. */
+typedef struct pd_contact {
+    int hit;            /* 1 when the solids overlap with positive volume */
+    double volume;      /* overlap volume V, m^3 */
+    double centroid[3]; /* centre of mass of the overlap (contact point), m */
+    double normal[3];   /* unit normal from A into B (eq. 4.19) */
+    double depth;       /* extent of the overlap along normal, m */
+    int degenerate;     /* 1 when a coplanar or touching configuration was resolved */
+    int tris_a, tris_b; /* triangles that survived the filter */
+} pd_contact;
+
+/* Overlap of A at pose pa with B at pose pb, computed on the host by the kernel's own code. */
+int pd_overlap_host(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const pd_pose *pb,
+                    int flags, pd_contact *out, pd_error *err);
+
+/* ---- OpenCL devices (engine/cl_device.c) ---------------------------------------------------- */
+
+typedef struct pd_device pd_device;
+
+/* Opens OpenCL device `index` over all platforms (-1: first GPU, else first device). */
+int pd_device_open(int index, pd_device **out, pd_error *err);
+void pd_device_close(pd_device *dev);
+const char *pd_device_name(const pd_device *dev);
+int pd_device_has_fp64(const pd_device *dev);
+
+/* The same overlap as pd_overlap_host, run by the OpenCL kernel on dev. */
+int pd_overlap_cl(pd_device *dev, const pd_mesh *a, const pd_pose *pa, const pd_mesh *b,
+                  const pd_pose *pb, int flags, pd_contact *out, pd_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif /* POLYDEM_H */

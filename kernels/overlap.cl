@@ -1,0 +1,53 @@
+/*
+ * overlap.cl - the polyhedral overlap of kernels/overlap.h, one work-item per pair.
+ * Built with -DPD_DOUBLE=0 or 1. Each pair places B by its own transform (18 reals: rot[9],
+ * tr[3], ca[3], cb[3]) and writes 12 reals: hit, degenerate, kept_a, kept_b, volume,
+ * centroid[3], normal[3], depth.
+ */
+#include "pd_real.h"
+#include "overlap.h"
+
+__kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, int nva, int nta,
+                            __global const pd_real *vb, __global const int *tb, int nvb, int ntb,
+                            __global const pd_real *xf, int npairs, int flags, pd_real vol_a,
+                            pd_real vol_b, __global int *iscr, __global pd_real *rscr, int pts_cap,
+                            __global pd_real *out)
+{
+    int g = (int)get_global_id(0);
+    if (g >= npairs) return;
+    __global const pd_real *x = xf + 18 * g;
+    ovl_in in;
+    in.va = va;
+    in.ta = ta;
+    in.nva = nva;
+    in.nta = nta;
+    in.vb = vb;
+    in.tb = tb;
+    in.nvb = nvb;
+    in.ntb = ntb;
+    for (int i = 0; i < 9; i++) in.rot[i] = x[i];
+    for (int i = 0; i < 3; i++) in.tr[i] = x[9 + i];
+    in.ca = v3(x[12], x[13], x[14]);
+    in.cb = v3(x[15], x[16], x[17]);
+    in.vol_a = vol_a;
+    in.vol_b = vol_b;
+    in.flags = flags;
+    in.iscr = iscr + (size_t)g * (size_t)ovl_iscratch_len(nta, ntb, nva, nvb);
+    in.rscr = rscr + (size_t)g * (size_t)ovl_rscratch_len(nva, nvb, pts_cap);
+    in.pts_cap = pts_cap;
+    ovl_out o;
+    ovl_compute(&in, &o);
+    __global pd_real *r = out + 12 * g;
+    r[0] = (pd_real)o.hit;
+    r[1] = (pd_real)o.degenerate;
+    r[2] = (pd_real)o.kept_a;
+    r[3] = (pd_real)o.kept_b;
+    r[4] = o.volume;
+    r[5] = o.centroid.x;
+    r[6] = o.centroid.y;
+    r[7] = o.centroid.z;
+    r[8] = o.normal.x;
+    r[9] = o.normal.y;
+    r[10] = o.normal.z;
+    r[11] = o.depth;
+}

@@ -1,0 +1,640 @@
+/*
+ * overlap.h - exact volumetric overlap of two closed triangle meshes (thesis sections 4.2, 5.2-5.3).
+ *
+ * Compiles as OpenCL C and as host C (see pd_real.h). Given polyhedra A and B, it finds the nodes
+ * of A n B with Algorithm 1 on the triangles that survive the half-plane filter (eqs. 5.3-5.5), and
+ * accumulates the overlap's mass properties with the cusp model (eqs. 5.7-5.11) without building the
+ * intersection polyhedron: every node contributes one signed simplex per (face, incident edge).
+ * Shapes may be non-convex; nothing is decomposed.
+ *
+ * Frame (figure 5.4): everything is evaluated in A's frame, where A's vertices are given as they
+ * are and B's vertices are mapped by p = rot * v + tr. Callers put A's centroid near the origin so
+ * the cusp simplices, which all have a node at the origin, stay small.
+ *
+ * Degenerate configurations (coplanar faces, a vertex on a face, an edge on an edge, coincident
+ * shapes) are resolved by simulation of simplicity: every predicate is evaluated for B displaced by
+ * eps * w with w = (1, d, d^2) and eps >> d infinitesimal, so each zero determinant takes the sign
+ * of its first non-zero symbolic term. Volume and centroid are continuous in the displacement, so
+ * the perturbed configuration's combinatorics evaluated at eps = 0 give the exact answer. The normal
+ * of eq. 4.19 is not continuous where faces of A and B are coplanar (which of the two owns the
+ * shared face flips with w), so when a degenerate predicate was met the pass is repeated with -w
+ * and the two normals are averaged: shared faces then cancel, as they must.
+ *
+ * A determinant within the configuration's rounding resolution (OVL_SNAP times the coordinate
+ * scale L to the power of its length dimension) is taken as exactly zero and resolved the same
+ * way: nearly coplanar or nearly coincident faces, which rounding of the pose produces, then
+ * behave like exactly coplanar ones instead of taking random signs from rounding noise. The
+ * bound is one absolute resolution for the whole configuration (features closer than about
+ * OVL_SNAP * L count as touching), not a per-determinant one: a determinant whose own factors are
+ * noise-sized would otherwise see the noise while its neighbours snap.
+ *
+ * Every predicate shared between neighbouring triangles (edge-edge orientation, ray-edge
+ * orientation, crossing points) is computed from the edge's canonical orientation (lower vertex
+ * index first), so the two triangles of an edge always agree bit for bit on what crosses where.
+ */
+#ifndef PD_OVERLAP_H
+#define PD_OVERLAP_H
+
+#include "pd_real.h"
+
+#define OVL_NO_FILTER 2 /* same value as PD_OVERLAP_NO_FILTER */
+
+/* Input of one overlap computation. Scratch sizes: see ovl_iscratch_len / ovl_rscratch_len. */
+typedef struct ovl_in {
+    PD_GLOBAL const pd_real *va; /* A's vertices, xyz, in A's frame */
+    PD_GLOBAL const int *ta;     /* A's triangles, outward counter-clockwise */
+    int nva, nta;
+    PD_GLOBAL const pd_real *vb; /* B's vertices in B's own frame */
+    PD_GLOBAL const int *tb;
+    int nvb, ntb;
+    pd_real rot[9]; /* B's frame -> A's frame, row-major: p = rot * v + tr */
+    pd_real tr[3];
+    pd_v3 ca, cb;         /* centroids of A and B in A's frame (filter direction, eq. 5.3) */
+    pd_real vol_a, vol_b; /* mesh volumes; set the "no overlap" threshold */
+    int flags;
+    PD_GLOBAL int *iscr;     /* ovl_iscratch_len ints */
+    PD_GLOBAL pd_real *rscr; /* ovl_rscratch_len reals */
+    int pts_cap;             /* capacity for overlap nodes kept for the depth */
+} ovl_in;
+
+typedef struct ovl_out {
+    int hit;          /* overlap volume above round-off */
+    int degenerate;   /* a zero predicate was resolved symbolically */
+    int kept_a;       /* triangles of A that survived the filter */
+    int kept_b;       /* triangles of B that survived the filter */
+    pd_real volume;   /* V */
+    pd_v3 centroid;   /* centre of mass of the overlap, A's frame */
+    pd_v3 normal;     /* unit, from A into B (eq. 4.19), A's frame */
+    pd_real depth;    /* extent of the overlap along normal */
+} ovl_out;
+
+PD_FN int ovl_iscratch_len(int nta, int ntb, int nva, int nvb) { return nta + ntb + nva + nvb; }
+PD_FN int ovl_rscratch_len(int nva, int nvb, int pts_cap)
+{
+    return nva + nvb + 3 * nvb + 3 * pts_cap;
+}
+
+/* Vertex state bits (per pass). */
+#define OVL_V_READY 1  /* B only: transformed into A's frame */
+#define OVL_V_TESTED 2 /* inside test done in this pass */
+#define OVL_V_INSIDE 4 /* inside the other polyhedron */
+
+typedef struct ovl_ctx {
+    const ovl_in *in;
+    pd_v3 d; /* filter direction, eq. 5.3 */
+    pd_real e1, e2;
+    int filter;
+    int ka, kb;
+    PD_GLOBAL int *kept_a, *kept_b, *st_a, *st_b;
+    PD_GLOBAL pd_real *proj_a, *proj_b, *vbt, *pts;
+    int npts, pts_overflow, store_pts;
+    pd_real pad;        /* OVL_SNAP * L: the configuration's length resolution */
+    pd_real tol2, tol3; /* snap bounds for determinants of length^2 and length^3 */
+    int flip;       /* 0: B displaced by +eps w, 1: by -eps w */
+    int degenerate; /* a predicate was exactly zero */
+    /* cusp sums */
+    pd_real vol;
+    pd_v3 moment;   /* first moment of volume */
+    pd_v3 area_a;   /* sum of area * outward normal over A's faces inside B */
+    pd_v3 area_b;   /* the same over B's faces inside A */
+    /* depth mode: project nodes on n instead of storing them */
+    int depth_mode;
+    pd_v3 n;
+    pd_real lo, hi;
+} ovl_ctx;
+
+/* Relative size below which a determinant is rounding noise: its inputs carry a few ulps from the
+ * pose transform and the determinant adds about ten more; 64 ulps leaves a margin. */
+#define OVL_SNAP (PD_R(64) * PD_EPS)
+
+PD_FN pd_real ovl_det(pd_v3 a, pd_v3 b, pd_v3 c) { return v3_dot(a, v3_cross(b, c)); }
+
+/*
+ * Sign of q0 + eps * (g . w) for w = (1, d, d^2): the sign of q0 when |q0| exceeds the snap bound
+ * tol, else of the first non-zero
+ * component of g (negated for the -w pass). Zero only when g vanishes, which the callers' geometry
+ * rules out (a parallel edge or ray, already rejected by a plane test).
+ */
+PD_FN int ovl_sos(ovl_ctx *c, pd_real q0, pd_real tol, pd_v3 g)
+{
+    if (q0 > tol) return 1;
+    if (q0 < -tol) return -1;
+    c->degenerate = 1;
+    /* components of g within rounding of its largest are zero too (near-aligned geometry) */
+    pd_real gt = OVL_SNAP * v3_amax(g);
+    int s = g.x > gt    ? 1
+            : g.x < -gt ? -1
+            : g.y > gt  ? 1
+            : g.y < -gt ? -1
+            : g.z > gt  ? 1
+            : g.z < -gt ? -1
+                        : 0;
+    return c->flip ? -s : s;
+}
+
+PD_FN pd_v3 ovl_va(const ovl_ctx *c, int i) { return v3_load(c->in->va, i); }
+PD_FN pd_v3 ovl_vb(const ovl_ctx *c, int j) { return v3_load(c->vbt, j); }
+
+/*
+ * Orientation of A's edge a0->a1 against B's edge b0->b1, both canonical (lower index first):
+ * sign of det(a1 - a0, b0 - a0, b1 - a0) with B displaced. The eps term is
+ * det(a1 - a0, w, b1 - b0) = w . ((b1 - b0) x (a1 - a0)).
+ */
+PD_FN int ovl_edge_edge(ovl_ctx *c, int ia0, int ia1, int ib0, int ib1)
+{
+    pd_v3 a0 = ovl_va(c, ia0), da = v3_sub(ovl_va(c, ia1), a0);
+    pd_v3 b0 = ovl_vb(c, ib0), b1 = ovl_vb(c, ib1);
+    pd_real q0 = ovl_det(da, v3_sub(b0, a0), v3_sub(b1, a0));
+    return ovl_sos(c, q0, c->tol3, v3_cross(v3_sub(b1, b0), da));
+}
+
+/* Directed edge-edge orientation from canonical evaluation: A edge i->j against B edge k->l. */
+PD_FN int ovl_edge_edge_dir(ovl_ctx *c, int i, int j, int k, int l)
+{
+    int s = i < j ? 1 : -1;
+    if (k > l) s = -s;
+    return s * ovl_edge_edge(c, i < j ? i : j, i < j ? j : i, k < l ? k : l, k < l ? l : k);
+}
+
+/* Side of A's point p against B's triangle plane (u0, raw normal nu): eps term is -w . nu. */
+PD_FN int ovl_side_a(ovl_ctx *c, pd_v3 p, pd_v3 u0, pd_v3 nu, pd_real *q0)
+{
+    *q0 = v3_dot(v3_sub(p, u0), nu);
+    return ovl_sos(c, *q0, c->tol3, v3_scale(nu, PD_R(-1)));
+}
+
+/* Side of B's point u against A's triangle plane (t0, raw normal nt): eps term is +w . nt. */
+PD_FN int ovl_side_b(ovl_ctx *c, pd_v3 u, pd_v3 t0, pd_v3 nt, pd_real *q0)
+{
+    *q0 = v3_dot(v3_sub(u, t0), nt);
+    return ovl_sos(c, *q0, c->tol3, nt);
+}
+
+/* Adds the cusp (p, t, n, b = -nu) of a face with outward unit normal nu (eqs. 5.8-5.11). */
+PD_FN void ovl_cusp(ovl_ctx *c, pd_v3 p, pd_v3 t, pd_v3 n, pd_v3 nu, int on_b)
+{
+    pd_real tp = v3_dot(t, p), np = v3_dot(n, p), hp = v3_dot(nu, p);
+    pd_real area = PD_R(0.5) * tp * np;  /* eq. 5.9 */
+    pd_real vol = area * hp / PD_R(3.0); /* eq. 5.10: -(1/6)(t.p)(n.p)(b.p) */
+    c->vol += vol;
+    /*
+     * eq. 5.11: the simplex of eq. 5.8 has nodes p, p - (t.p)t, p - (t.p)t - (n.p)n and the
+     * origin, so its centroid is (3p - 2(t.p)t - (n.p)n)/4 (the printed eq. 5.11 flips both signs).
+     */
+    pd_v3 cen = v3_sub(v3_sub(v3_scale(p, PD_R(3)), v3_scale(t, PD_R(2) * tp)), v3_scale(n, np));
+    c->moment = v3_add(c->moment, v3_scale(cen, vol * PD_R(0.25)));
+    if (on_b)
+        c->area_b = v3_add(c->area_b, v3_scale(nu, area));
+    else
+        c->area_a = v3_add(c->area_a, v3_scale(nu, area));
+}
+
+/* Records a node of the overlap for the depth (or projects it in depth mode). */
+PD_FN void ovl_node(ovl_ctx *c, pd_v3 p)
+{
+    if (c->depth_mode) {
+        pd_real s = v3_dot(p, c->n);
+        if (s < c->lo) c->lo = s;
+        if (s > c->hi) c->hi = s;
+    } else if (c->store_pts) {
+        if (c->npts < c->in->pts_cap)
+            v3_store(c->pts, c->npts++, p);
+        else
+            c->pts_overflow = 1;
+    }
+}
+
+/*
+ * The three cusps at a node where edge (of face F, unit direction te pointing into the other solid,
+ * in-face inward normal m) pierces face G of the other solid: one along the edge, and one on each
+ * face along their line of intersection, heading into F (eq. 5.7's t, n, b at that node).
+ */
+PD_FN void ovl_crossing_cusps(ovl_ctx *c, pd_v3 p, pd_v3 te, pd_v3 m, pd_v3 nf, pd_v3 ng,
+                              int f_on_b)
+{
+    pd_v3 cr = v3_cross(nf, ng);
+    pd_real len = v3_norm(cr);
+    pd_real cs = v3_dot(nf, ng);
+    if (len <= OVL_SNAP) {
+        /* faces parallel to within rounding have no line of intersection; predicates that
+         * disagree by rounding can still report a crossing, which carries no area */
+        ovl_cusp(c, p, te, m, nf, f_on_b);
+        ovl_node(c, p);
+        return;
+    }
+    pd_v3 l = v3_scale(cr, PD_R(1) / len);
+    if (v3_dot(l, m) < PD_R(0)) l = v3_scale(l, PD_R(-1));
+    /* In F's plane the other solid lies towards -ng; in G's plane this solid lies towards -nf. */
+    pd_v3 n_f = v3_scale(v3_sub(v3_scale(nf, cs), ng), PD_R(1) / len);
+    pd_v3 n_g = v3_scale(v3_sub(v3_scale(ng, cs), nf), PD_R(1) / len);
+    ovl_cusp(c, p, te, m, nf, f_on_b);
+    ovl_cusp(c, p, l, n_f, nf, f_on_b);
+    ovl_cusp(c, p, l, n_g, ng, !f_on_b);
+    ovl_node(c, p);
+}
+
+/* Point-in-B test for A's vertex i: parity of a ray cast along -d against B's kept triangles. */
+PD_FN int ovl_inside_b(ovl_ctx *c, int i)
+{
+    PD_GLOBAL const int *tb = c->in->tb;
+    pd_v3 p = ovl_va(c, i);
+    if (c->filter && c->proj_a[i] < c->e2) return 0; /* below B's half-plane: outside */
+    pd_v3 r = v3_scale(c->d, PD_R(-1));
+    int odd = 0;
+    for (int k = 0; k < c->kb; k++) {
+        int u = c->kept_b[k];
+        int i0 = tb[3 * u], i1 = tb[3 * u + 1], i2 = tb[3 * u + 2];
+        pd_v3 u0 = ovl_vb(c, i0), u1 = ovl_vb(c, i1), u2 = ovl_vb(c, i2);
+        pd_v3 nu = v3_cross(v3_sub(u1, u0), v3_sub(u2, u0));
+        pd_real rn = v3_dot(r, nu);
+        /* a ray parallel to the plane, to within rounding, never crosses it (exactly parallel
+         * it would cross only if it lay in the plane, which the perturbation rules out) */
+        if (PD_FABS(rn) <= c->tol2) continue;
+        pd_real q0;
+        int s = ovl_side_a(c, p, u0, nu, &q0);
+        if ((s > 0) != (rn < PD_R(0))) continue; /* plane behind the ray's start */
+        int idx[3] = {i0, i1, i2};
+        int sg[3];
+        for (int e = 0; e < 3; e++) {
+            int k0 = idx[e], k1 = idx[(e + 1) % 3];
+            int lo = k0 < k1 ? k0 : k1, hi = k0 < k1 ? k1 : k0;
+            pd_v3 b0 = ovl_vb(c, lo), b1 = ovl_vb(c, hi);
+            /* det(r, b0 - q, b1 - q) for q = p - eps w: eps term w . ((b1 - b0) x r) */
+            int sv = ovl_sos(c, ovl_det(r, v3_sub(b0, p), v3_sub(b1, p)), c->tol2,
+                             v3_cross(v3_sub(b1, b0), r));
+            sg[e] = k0 < k1 ? sv : -sv;
+        }
+        if (sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2]) odd ^= 1;
+    }
+    return odd;
+}
+
+/* Point-in-A test for B's vertex j: ray along +d against A's kept triangles. */
+PD_FN int ovl_inside_a(ovl_ctx *c, int j)
+{
+    PD_GLOBAL const int *ta = c->in->ta;
+    pd_v3 u = ovl_vb(c, j);
+    if (c->filter && c->proj_b[j] > c->e1) return 0; /* above A's half-plane: outside */
+    pd_v3 r = c->d;
+    int odd = 0;
+    for (int k = 0; k < c->ka; k++) {
+        int t = c->kept_a[k];
+        int i0 = ta[3 * t], i1 = ta[3 * t + 1], i2 = ta[3 * t + 2];
+        pd_v3 t0 = ovl_va(c, i0), t1 = ovl_va(c, i1), t2 = ovl_va(c, i2);
+        pd_v3 nt = v3_cross(v3_sub(t1, t0), v3_sub(t2, t0));
+        pd_real rn = v3_dot(r, nt);
+        if (PD_FABS(rn) <= c->tol2) continue; /* parallel */
+        pd_real q0;
+        int s = ovl_side_b(c, u, t0, nt, &q0);
+        if ((s > 0) != (rn < PD_R(0))) continue;
+        int idx[3] = {i0, i1, i2};
+        int sg[3];
+        for (int e = 0; e < 3; e++) {
+            int k0 = idx[e], k1 = idx[(e + 1) % 3];
+            int lo = k0 < k1 ? k0 : k1, hi = k0 < k1 ? k1 : k0;
+            pd_v3 a0 = ovl_va(c, lo), a1 = ovl_va(c, hi);
+            /* det(r, a0 - q, a1 - q) for q = u + eps w: eps term -w . ((a1 - a0) x r) */
+            int sv = ovl_sos(c, ovl_det(r, v3_sub(a0, u), v3_sub(a1, u)), c->tol2,
+                             v3_scale(v3_cross(v3_sub(a1, a0), r), PD_R(-1)));
+            sg[e] = k0 < k1 ? sv : -sv;
+        }
+        if (sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2]) odd ^= 1;
+    }
+    return odd;
+}
+
+PD_FN int ovl_vertex_in_b(ovl_ctx *c, int i)
+{
+    int st = c->st_a[i];
+    if (!(st & OVL_V_TESTED)) {
+        st |= OVL_V_TESTED;
+        if (ovl_inside_b(c, i)) {
+            st |= OVL_V_INSIDE;
+            ovl_node(c, ovl_va(c, i));
+        }
+        c->st_a[i] = st;
+    }
+    return (st & OVL_V_INSIDE) != 0;
+}
+
+PD_FN int ovl_vertex_in_a(ovl_ctx *c, int j)
+{
+    int st = c->st_b[j];
+    if (!(st & OVL_V_TESTED)) {
+        st |= OVL_V_TESTED;
+        if (ovl_inside_a(c, j)) {
+            st |= OVL_V_INSIDE;
+            ovl_node(c, ovl_vb(c, j));
+        }
+        c->st_b[j] = st;
+    }
+    return (st & OVL_V_INSIDE) != 0;
+}
+
+/* Geometry of one triangle: corners, unit outward normal, unit edge directions, inward normals. */
+typedef struct ovl_tri {
+    int id[3];
+    pd_v3 p[3];
+    pd_v3 nraw; /* (p1 - p0) x (p2 - p0) */
+    pd_v3 nu;   /* unit outward normal */
+    pd_v3 e[3]; /* unit direction of edge k: p[k] -> p[k+1] */
+    pd_v3 m[3]; /* unit in-plane normal of edge k pointing into the triangle */
+    pd_v3 lo, hi;
+} ovl_tri;
+
+PD_FN void ovl_tri_make(ovl_tri *t, pd_v3 p0, pd_v3 p1, pd_v3 p2, pd_real pad)
+{
+    t->p[0] = p0;
+    t->p[1] = p1;
+    t->p[2] = p2;
+    t->nraw = v3_cross(v3_sub(p1, p0), v3_sub(p2, p0));
+    t->nu = v3_unit(t->nraw);
+    for (int k = 0; k < 3; k++) {
+        t->e[k] = v3_unit(v3_sub(t->p[(k + 1) % 3], t->p[k]));
+        t->m[k] = v3_cross(t->nu, t->e[k]);
+    }
+    t->lo = v3(fmin(fmin(p0.x, p1.x), p2.x), fmin(fmin(p0.y, p1.y), p2.y),
+               fmin(fmin(p0.z, p1.z), p2.z));
+    t->hi = v3(fmax(fmax(p0.x, p1.x), p2.x), fmax(fmax(p0.y, p1.y), p2.y),
+               fmax(fmax(p0.z, p1.z), p2.z));
+    /* Culling is a predicate too: pad by the resolution so boxes that touch to within rounding
+     * reach the symbolic tests instead of being rejected by noise. */
+    t->lo = v3(t->lo.x - pad, t->lo.y - pad, t->lo.z - pad);
+    t->hi = v3(t->hi.x + pad, t->hi.y + pad, t->hi.z + pad);
+}
+
+/* Crossing point of canonical edge lo->hi with a plane, from the edge ends' signed distances. */
+PD_FN pd_v3 ovl_cross_point(pd_v3 plo, pd_v3 phi, pd_real slo, pd_real shi)
+{
+    pd_real den = slo - shi;
+    pd_real lam = den != PD_R(0) ? slo / den : PD_R(0);
+    /* the crossing lies on the edge; when both ends are within rounding of the plane the
+     * quotient is noise, and must not throw the node off the edge */
+    lam = lam < PD_R(0) ? PD_R(0) : lam > PD_R(1) ? PD_R(1) : lam;
+    return v3_add(plo, v3_scale(v3_sub(phi, plo), lam));
+}
+
+/* All cusps between A's triangle T and B's triangle U from edges of one crossing the other. */
+PD_FN void ovl_pair(ovl_ctx *c, const ovl_tri *T, const ovl_tri *U)
+{
+    if (T->hi.x < U->lo.x || U->hi.x < T->lo.x || T->hi.y < U->lo.y || U->hi.y < T->lo.y ||
+        T->hi.z < U->lo.z || U->hi.z < T->lo.z)
+        return;
+    pd_real qa[3], qb[3];
+    int sa[3], sb[3];
+    for (int k = 0; k < 3; k++) sa[k] = ovl_side_a(c, T->p[k], U->p[0], U->nraw, &qa[k]);
+    for (int k = 0; k < 3; k++) sb[k] = ovl_side_b(c, U->p[k], T->p[0], T->nraw, &qb[k]);
+    int a_straddles = !(sa[0] == sa[1] && sa[1] == sa[2]);
+    int b_straddles = !(sb[0] == sb[1] && sb[1] == sb[2]);
+    if (!a_straddles || !b_straddles) return; /* one triangle wholly on one side of the other */
+
+    /* edges of T through U */
+    for (int k = 0; k < 3; k++) {
+        int k1 = (k + 1) % 3;
+        if (sa[k] == sa[k1]) continue;
+        int i = T->id[k], j = T->id[k1];
+        int s0 = ovl_edge_edge_dir(c, i, j, U->id[0], U->id[1]);
+        int s1 = ovl_edge_edge_dir(c, i, j, U->id[1], U->id[2]);
+        int s2 = ovl_edge_edge_dir(c, i, j, U->id[2], U->id[0]);
+        if (s0 == 0 || s0 != s1 || s1 != s2) continue;
+        pd_v3 p = i < j ? ovl_cross_point(T->p[k], T->p[k1], qa[k], qa[k1])
+                        : ovl_cross_point(T->p[k1], T->p[k], qa[k1], qa[k]);
+        pd_v3 te = sa[k1] < 0 ? T->e[k] : v3_scale(T->e[k], PD_R(-1));
+        ovl_crossing_cusps(c, p, te, T->m[k], T->nu, U->nu, 0);
+    }
+    /* edges of U through T */
+    for (int k = 0; k < 3; k++) {
+        int k1 = (k + 1) % 3;
+        if (sb[k] == sb[k1]) continue;
+        int i = U->id[k], j = U->id[k1];
+        /* det(u_j - u_i, t_a - u_i, t_b - u_i) equals the orientation of T's edge a->b against
+         * U's edge i->j, so the shared canonical predicate decides both tests. */
+        int s0 = ovl_edge_edge_dir(c, T->id[0], T->id[1], i, j);
+        int s1 = ovl_edge_edge_dir(c, T->id[1], T->id[2], i, j);
+        int s2 = ovl_edge_edge_dir(c, T->id[2], T->id[0], i, j);
+        if (s0 == 0 || s0 != s1 || s1 != s2) continue;
+        pd_v3 p = i < j ? ovl_cross_point(U->p[k], U->p[k1], qb[k], qb[k1])
+                        : ovl_cross_point(U->p[k1], U->p[k], qb[k1], qb[k]);
+        pd_v3 te = sb[k1] < 0 ? U->e[k] : v3_scale(U->e[k], PD_R(-1));
+        ovl_crossing_cusps(c, p, te, U->m[k], U->nu, T->nu, 1);
+    }
+}
+
+/* One pass of Algorithm 1 over the kept triangles, accumulating cusps. */
+PD_FN void ovl_pass(ovl_ctx *c)
+{
+    PD_GLOBAL const int *ta = c->in->ta;
+    PD_GLOBAL const int *tb = c->in->tb;
+    c->vol = PD_R(0);
+    c->moment = c->area_a = c->area_b = v3(0, 0, 0);
+    for (int i = 0; i < c->in->nva; i++) c->st_a[i] &= OVL_V_READY;
+    for (int j = 0; j < c->in->nvb; j++) c->st_b[j] &= OVL_V_READY;
+
+    for (int k = 0; k < c->ka; k++) {
+        int t = c->kept_a[k];
+        ovl_tri T;
+        T.id[0] = ta[3 * t];
+        T.id[1] = ta[3 * t + 1];
+        T.id[2] = ta[3 * t + 2];
+        ovl_tri_make(&T, ovl_va(c, T.id[0]), ovl_va(c, T.id[1]), ovl_va(c, T.id[2]), c->pad);
+        /* nodes of A inside B: two cusps per corner, along the triangle's two edges */
+        for (int q = 0; q < 3; q++) {
+            if (!ovl_vertex_in_b(c, T.id[q])) continue;
+            int qp = (q + 2) % 3;
+            ovl_cusp(c, T.p[q], T.e[q], T.m[q], T.nu, 0);
+            ovl_cusp(c, T.p[q], v3_scale(T.e[qp], PD_R(-1)), T.m[qp], T.nu, 0);
+        }
+        for (int l = 0; l < c->kb; l++) {
+            int u = c->kept_b[l];
+            ovl_tri U;
+            U.id[0] = tb[3 * u];
+            U.id[1] = tb[3 * u + 1];
+            U.id[2] = tb[3 * u + 2];
+            ovl_tri_make(&U, ovl_vb(c, U.id[0]), ovl_vb(c, U.id[1]), ovl_vb(c, U.id[2]), c->pad);
+            ovl_pair(c, &T, &U);
+        }
+    }
+    for (int l = 0; l < c->kb; l++) {
+        int u = c->kept_b[l];
+        int id[3] = {tb[3 * u], tb[3 * u + 1], tb[3 * u + 2]};
+        int any = 0;
+        for (int q = 0; q < 3; q++) any |= ovl_vertex_in_a(c, id[q]);
+        if (!any) continue;
+        ovl_tri U;
+        ovl_tri_make(&U, ovl_vb(c, id[0]), ovl_vb(c, id[1]), ovl_vb(c, id[2]), c->pad);
+        for (int q = 0; q < 3; q++) {
+            if (!(c->st_b[id[q]] & OVL_V_INSIDE)) continue;
+            int qp = (q + 2) % 3;
+            ovl_cusp(c, U.p[q], U.e[q], U.m[q], U.nu, 1);
+            ovl_cusp(c, U.p[q], v3_scale(U.e[qp], PD_R(-1)), U.m[qp], U.nu, 1);
+        }
+    }
+}
+
+PD_FN void ovl_miss(ovl_out *o, const ovl_ctx *c)
+{
+    o->hit = 0;
+    o->degenerate = c->degenerate;
+    o->kept_a = c->ka;
+    o->kept_b = c->kb;
+    o->volume = PD_R(0);
+    o->centroid = o->normal = v3(0, 0, 0);
+    o->depth = PD_R(0);
+}
+
+/* The overlap of A and B: volume, centroid, normal and depth (section 4.2). */
+PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
+{
+    ovl_ctx cx;
+    ovl_ctx *c = &cx;
+    c->in = in;
+    c->filter = !(in->flags & OVL_NO_FILTER);
+    c->kept_a = in->iscr;
+    c->kept_b = in->iscr + in->nta;
+    c->st_a = in->iscr + in->nta + in->ntb;
+    c->st_b = c->st_a + in->nva;
+    c->proj_a = in->rscr;
+    c->proj_b = in->rscr + in->nva;
+    c->vbt = c->proj_b + in->nvb;
+    c->pts = c->vbt + 3 * in->nvb;
+    c->npts = c->pts_overflow = 0;
+    c->store_pts = 1;
+    c->flip = c->degenerate = c->depth_mode = 0;
+    c->pad = c->tol2 = c->tol3 = PD_R(0);
+    c->ka = c->kb = 0;
+
+    /* eq. 5.3: the direction between the centres */
+    pd_v3 dc = v3_sub(in->cb, in->ca);
+    c->d = v3_dot(dc, dc) > PD_R(0) ? v3_unit(dc) : v3(0, 0, 1);
+    pd_v3 d = c->d;
+    /* d expressed in B's frame, so B's vertices are projected before being transformed */
+    pd_v3 db = v3(in->rot[0] * d.x + in->rot[3] * d.y + in->rot[6] * d.z,
+                  in->rot[1] * d.x + in->rot[4] * d.y + in->rot[7] * d.z,
+                  in->rot[2] * d.x + in->rot[5] * d.y + in->rot[8] * d.z);
+    pd_real trd = in->tr[0] * d.x + in->tr[1] * d.y + in->tr[2] * d.z;
+
+    /* eq. 5.4: extents; eq. 5.5: keep the triangles reaching into the other's half-plane */
+    c->e1 = -PD_REAL_MAX;
+    c->e2 = PD_REAL_MAX;
+    pd_real scale = PD_R(0);
+    for (int i = 0; i < in->nva; i++) {
+        c->proj_a[i] = v3_dot(v3_load(in->va, i), d);
+        if (c->proj_a[i] > c->e1) c->e1 = c->proj_a[i];
+        if (PD_FABS(c->proj_a[i]) > scale) scale = PD_FABS(c->proj_a[i]);
+        c->st_a[i] = 0;
+    }
+    for (int j = 0; j < in->nvb; j++) {
+        c->proj_b[j] = v3_dot(v3_load(in->vb, j), db) + trd;
+        if (c->proj_b[j] < c->e2) c->e2 = c->proj_b[j];
+        if (PD_FABS(c->proj_b[j]) > scale) scale = PD_FABS(c->proj_b[j]);
+        c->st_b[j] = 0;
+    }
+    /* The half-planes are widened by the resolution: B's projections are computed in B's frame,
+     * and a contact that touches to within rounding must reach the symbolic tests. */
+    pd_real pad = OVL_SNAP * scale;
+    c->e1 += pad;
+    c->e2 -= pad;
+    c->pad = pad;
+    if (c->filter && !(c->e1 > c->e2)) { /* half-planes disjoint: no volume */
+        ovl_miss(o, c);
+        return;
+    }
+    for (int t = 0; t < in->nta; t++) {
+        PD_GLOBAL const int *v = in->ta + 3 * t;
+        pd_real mx = fmax(fmax(c->proj_a[v[0]], c->proj_a[v[1]]), c->proj_a[v[2]]);
+        if (!c->filter || mx >= c->e2) c->kept_a[c->ka++] = t;
+    }
+    for (int u = 0; u < in->ntb; u++) {
+        PD_GLOBAL const int *v = in->tb + 3 * u;
+        pd_real mn = fmin(fmin(c->proj_b[v[0]], c->proj_b[v[1]]), c->proj_b[v[2]]);
+        if (!c->filter || mn <= c->e1) c->kept_b[c->kb++] = u;
+    }
+    if (c->ka == 0 || c->kb == 0) {
+        ovl_miss(o, c);
+        return;
+    }
+    pd_real lsc = PD_R(0); /* L: largest coordinate magnitude in play */
+    for (int k = 0; k < c->ka; k++) {
+        PD_GLOBAL const int *v = in->ta + 3 * c->kept_a[k];
+        for (int q = 0; q < 3; q++) {
+            pd_real m = v3_amax(v3_load(in->va, v[q]));
+            if (m > lsc) lsc = m;
+        }
+    }
+    /* map the vertices of B's kept triangles into A's frame */
+    for (int l = 0; l < c->kb; l++) {
+        PD_GLOBAL const int *v = in->tb + 3 * c->kept_b[l];
+        for (int q = 0; q < 3; q++) {
+            int j = v[q];
+            if (c->st_b[j] & OVL_V_READY) continue;
+            pd_v3 x = v3_load(in->vb, j);
+            pd_v3 y = v3(in->rot[0] * x.x + in->rot[1] * x.y + in->rot[2] * x.z + in->tr[0],
+                         in->rot[3] * x.x + in->rot[4] * x.y + in->rot[5] * x.z + in->tr[1],
+                         in->rot[6] * x.x + in->rot[7] * x.y + in->rot[8] * x.z + in->tr[2]);
+            v3_store(c->vbt, j, y);
+            c->st_b[j] = OVL_V_READY;
+            if (v3_amax(y) > lsc) lsc = v3_amax(y);
+        }
+    }
+    /* the resolution: coordinates carry about OVL_SNAP * L of rounding from the transforms */
+    c->pad = OVL_SNAP * lsc;
+    c->tol2 = c->pad * lsc;
+    c->tol3 = c->tol2 * lsc;
+
+    ovl_pass(c);
+    pd_real vol = c->vol;
+    pd_v3 mom = c->moment;
+    pd_v3 sdiff = v3_sub(c->area_a, c->area_b);
+    pd_real smag = v3_norm(sdiff);
+    int degenerate = c->degenerate;
+    if (degenerate) {
+        /* coplanar faces may have been owned by one side only: repeat with -w and average */
+        c->flip = 1;
+        c->store_pts = 0;
+        ovl_pass(c);
+        pd_v3 s2 = v3_sub(c->area_a, c->area_b);
+        vol = PD_R(0.5) * (vol + c->vol);
+        mom = v3_scale(v3_add(mom, c->moment), PD_R(0.5));
+        smag = PD_R(0.5) * (smag + v3_norm(s2));
+        sdiff = v3_scale(v3_add(sdiff, s2), PD_R(0.5));
+    }
+    pd_real vmin = in->vol_a < in->vol_b ? in->vol_a : in->vol_b;
+    if (!(vol > PD_R(100) * PD_EPS * vmin)) { /* touching, or round-off of a touching contact */
+        c->degenerate = degenerate;
+        ovl_miss(o, c);
+        return;
+    }
+    o->hit = 1;
+    o->degenerate = degenerate;
+    o->kept_a = c->ka;
+    o->kept_b = c->kb;
+    o->volume = vol;
+    o->centroid = v3_scale(mom, PD_R(1) / vol);
+    /* eq. 4.19 from both sides: A's faces inside B minus B's faces inside A (equal and opposite
+     * in exact arithmetic; faces shared by both cancel). Coincident shapes have no direction at
+     * all: fall back to the centre line, then to +z. */
+    pd_real sn = v3_norm(sdiff);
+    if (sn > PD_R(1000) * PD_EPS * smag)
+        o->normal = v3_scale(sdiff, PD_R(1) / sn);
+    else
+        o->normal = v3_dot(dc, dc) > PD_R(0) ? c->d : v3(0, 0, 1);
+
+    /* depth: extent of the overlap's nodes along the normal (section 4.2) */
+    c->n = o->normal;
+    c->lo = PD_REAL_MAX;
+    c->hi = -PD_REAL_MAX;
+    if (!c->pts_overflow) {
+        for (int q = 0; q < c->npts; q++) {
+            pd_real s = v3_dot(v3_load(c->pts, q), c->n);
+            if (s < c->lo) c->lo = s;
+            if (s > c->hi) c->hi = s;
+        }
+    } else {
+        c->flip = 0;
+        c->depth_mode = 1;
+        ovl_pass(c);
+    }
+    o->depth = c->hi > c->lo ? c->hi - c->lo : PD_R(0);
+}
+
+#endif /* PD_OVERLAP_H */

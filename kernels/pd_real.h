@@ -1,0 +1,95 @@
+/*
+ * pd_real.h - the scalar and 3-vector types shared by OpenCL C kernels and host C.
+ *
+ * The including file defines PD_DOUBLE to 1 (double) or 0 (single) before including this header;
+ * every kernel header then compiles unchanged as OpenCL C (on the device) and as C11 (on the host,
+ * once per precision), so tests and CLI tools run exactly the code the kernels run.
+ */
+#ifndef PD_REAL_H
+#define PD_REAL_H
+
+#ifndef PD_DOUBLE
+#error "define PD_DOUBLE to 0 or 1 before including pd_real.h"
+#endif
+
+#ifdef __OPENCL_VERSION__
+#if PD_DOUBLE
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#endif
+/* The host builds with -ffp-contract=off; fusing here would make host and device disagree. */
+#pragma OPENCL FP_CONTRACT OFF
+#define PD_GLOBAL __global
+#define PD_FN static inline
+#define PD_SQRT(x) sqrt(x)
+#define PD_FABS(x) fabs(x)
+#else
+#include <math.h>
+#define PD_GLOBAL
+#define PD_FN static inline
+#if PD_DOUBLE
+#define PD_SQRT(x) sqrt(x)
+#define PD_FABS(x) fabs(x)
+#else
+#define PD_SQRT(x) sqrtf(x)
+#define PD_FABS(x) fabsf(x)
+#endif
+#endif
+
+#if PD_DOUBLE
+typedef double pd_real;
+#define PD_EPS 2.220446049250313e-16
+#define PD_REAL_MAX 1.7976931348623157e308
+#else
+typedef float pd_real;
+#define PD_EPS 1.1920929e-7f
+#define PD_REAL_MAX 3.4028235e38f
+#endif
+
+#define PD_R(x) ((pd_real)(x))
+
+typedef struct pd_v3 {
+    pd_real x, y, z;
+} pd_v3;
+
+PD_FN pd_v3 v3(pd_real x, pd_real y, pd_real z)
+{
+    pd_v3 r;
+    r.x = x;
+    r.y = y;
+    r.z = z;
+    return r;
+}
+PD_FN pd_v3 v3_add(pd_v3 a, pd_v3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
+PD_FN pd_v3 v3_sub(pd_v3 a, pd_v3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+PD_FN pd_v3 v3_scale(pd_v3 a, pd_real s) { return v3(a.x * s, a.y * s, a.z * s); }
+PD_FN pd_real v3_dot(pd_v3 a, pd_v3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+PD_FN pd_v3 v3_cross(pd_v3 a, pd_v3 b)
+{
+    return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+/* Largest component magnitude (the max-norm), for cheap error bounds. */
+PD_FN pd_real v3_amax(pd_v3 a)
+{
+    pd_real x = PD_FABS(a.x), y = PD_FABS(a.y), z = PD_FABS(a.z);
+    return x > y ? (x > z ? x : z) : (y > z ? y : z);
+}
+PD_FN pd_real v3_norm(pd_v3 a) { return PD_SQRT(v3_dot(a, a)); }
+/* Unit vector along a; a zero vector stays zero (callers never pass one on a live path). */
+PD_FN pd_v3 v3_unit(pd_v3 a)
+{
+    pd_real n = v3_norm(a);
+    return n > PD_R(0) ? v3_scale(a, PD_R(1) / n) : a;
+}
+/* Loads vertex i of a packed xyz array. */
+PD_FN pd_v3 v3_load(PD_GLOBAL const pd_real *p, int i)
+{
+    return v3(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
+}
+PD_FN void v3_store(PD_GLOBAL pd_real *p, int i, pd_v3 a)
+{
+    p[3 * i] = a.x;
+    p[3 * i + 1] = a.y;
+    p[3 * i + 2] = a.z;
+}
+
+#endif /* PD_REAL_H */

@@ -1,0 +1,670 @@
+/*
+ * test_overlap.c - the polyhedral overlap (kernels/overlap.h) against analytic solutions and an
+ * independent tetrahedral-decomposition reference (ref_overlap.h).
+ *
+ * Tolerances: analytic cases with coordinates exact in binary are held to 1e-12 (a few hundred
+ * ulps of the cusp sums, whose terms are O(size^3)); the reference comparison to 1e-9 relative
+ * (both are exact methods, differing only in round-off of different operation orders); the
+ * icosphere cap convergence to the discretisation error bound stated at that test.
+ */
+#include <stdint.h>
+#include <string.h>
+
+#include "polydem.h"
+#include "ref_overlap.h"
+#include "test.h"
+
+static const double PI = 3.14159265358979323846;
+
+static pd_mesh *builtin(const char *name, int tris)
+{
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    if (pd_mesh_builtin(name, tris, 1, &m, &err) != PD_OK) {
+        printf("  builtin %s: %s\n", name, err.msg);
+        exit(1);
+    }
+    return m;
+}
+
+static pd_mesh *box(double x0, double y0, double z0, double x1, double y1, double z1)
+{
+    double v[24];
+    for (int i = 0; i < 8; i++) {
+        v[3 * i] = (i & 1) ? x1 : x0;
+        v[3 * i + 1] = (i & 2) ? y1 : y0;
+        v[3 * i + 2] = (i & 4) ? z1 : z0;
+    }
+    static const int t[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                              2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    if (pd_mesh_from_arrays(v, 8, t, 12, "box", &m, &err) != PD_OK) {
+        printf("  box: %s\n", err.msg);
+        exit(1);
+    }
+    return m;
+}
+
+static pd_pose pose(double x, double y, double z, double qw, double qx, double qy, double qz)
+{
+    pd_pose p = {{x, y, z}, {qw, qx, qy, qz}};
+    return p;
+}
+static const pd_pose ORIGIN = {{0, 0, 0}, {1, 0, 0, 0}};
+
+static pd_contact overlap(const pd_mesh *a, pd_pose pa, const pd_mesh *b, pd_pose pb, int flags)
+{
+    pd_contact c;
+    pd_error err = {0};
+    int rc = pd_overlap_host(a, &pa, b, &pb, flags, &c, &err);
+    if (rc != PD_OK) {
+        printf("  overlap failed: %s\n", err.msg);
+        memset(&c, 0, sizeof c);
+    }
+    return c;
+}
+
+static int finite_contact(const pd_contact *c)
+{
+    double s = c->volume + c->depth;
+    for (int k = 0; k < 3; k++) s += c->centroid[k] + c->normal[k];
+    return isfinite(s);
+}
+
+#define CHECK_VEC(ex, ey, ez, v, tol)                                                              \
+    do {                                                                                           \
+        CHECK_NEAR(ex, (v)[0], tol);                                                               \
+        CHECK_NEAR(ey, (v)[1], tol);                                                               \
+        CHECK_NEAR(ez, (v)[2], tol);                                                               \
+    } while (0)
+
+/* A deterministic generator for random poses (splitmix64). */
+static uint64_t rng_state = 0x9e3779b97f4a7c15ull;
+static double rnd(void)
+{
+    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    z ^= z >> 31;
+    return (double)(z >> 11) / 9007199254740992.0;
+}
+static void rnd_quat(double q[4])
+{
+    double n;
+    do {
+        for (int k = 0; k < 4; k++) q[k] = 2 * rnd() - 1;
+        n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    } while (n < 0.1 || n > 1);
+    for (int k = 0; k < 4; k++) q[k] /= n;
+}
+
+/* ---- analytic cases ------------------------------------------------------------------------ */
+
+TEST(offset_cubes_are_a_box)
+{
+    pd_mesh *c = builtin("cube", 0);
+    /* overlap of [-.5,.5]^3 and its translate by (dx,dy,dz): box of sides 1-|d| */
+    double offs[][3] = {{0.5, 0, 0}, {0, -0.25, 0}, {0.3, 0.2, 0.1}, {-0.125, 0.375, -0.5}};
+    for (int i = 0; i < 4; i++) {
+        double *d = offs[i];
+        pd_contact r = overlap(c, ORIGIN, c, pose(d[0], d[1], d[2], 1, 0, 0, 0), 0);
+        double s[3], vol = 1, sa[3] = {0, 0, 0}, sn = 0;
+        for (int k = 0; k < 3; k++) {
+            s[k] = 1 - fabs(d[k]);
+            vol *= s[k];
+        }
+        /* A's faces inside B: the face towards B on each axis with d != 0, area = product of the
+         * other two sides (eq. 4.19) */
+        for (int k = 0; k < 3; k++) {
+            if (d[k] != 0) sa[k] = (d[k] > 0 ? 1 : -1) * s[(k + 1) % 3] * s[(k + 2) % 3];
+            sn += sa[k] * sa[k];
+        }
+        sn = sqrt(sn);
+        CHECK(r.hit);
+        CHECK_NEAR(vol, r.volume, 1e-12);
+        CHECK_VEC(d[0] / 2, d[1] / 2, d[2] / 2, r.centroid, 1e-12);
+        CHECK_VEC(sa[0] / sn, sa[1] / sn, sa[2] / sn, r.normal, 1e-12);
+        double depth = 0;
+        for (int k = 0; k < 3; k++) depth += s[k] * fabs(sa[k] / sn);
+        CHECK_NEAR(depth, r.depth, 1e-12);
+    }
+    pd_mesh_destroy(c);
+}
+
+TEST(rotated_cube_corner_into_face)
+{
+    /* B = cube turned 45 degrees about z, its vertical edge pushed h into A's face x = 0.5: the
+     * overlap is a prism of triangular section (base 2h, height h) and length 1 */
+    pd_mesh *c = builtin("cube", 0);
+    double h = 0.125, s = sin(PI / 8), co = cos(PI / 8);
+    pd_contact r = overlap(c, ORIGIN, c, pose(0.5 + sqrt(0.5) - h, 0, 0, co, 0, 0, s), 0);
+    CHECK(r.hit);
+    CHECK_REL(h * h, r.volume, 1e-12);
+    CHECK_VEC(0.5 - h / 3, 0, 0, r.centroid, 1e-12);
+    CHECK_VEC(1, 0, 0, r.normal, 1e-12);
+    CHECK_NEAR(h, r.depth, 1e-12);
+    pd_mesh_destroy(c);
+}
+
+TEST(tetrahedra_along_a_vertex_direction)
+{
+    /* T n (T + s(1,1,1)) is T shrunk about vertex (1,1,1) by 1 - 3s/4 (the face x+y+z = -1
+     * moves to -1 + 3s): V = (8/3) k^3, centroid (3s/4)(1,1,1), normal (1,1,1)/sqrt3 and depth
+     * (4 - 3s)/sqrt3. */
+    pd_mesh *t = builtin("tetrahedron", 0);
+    double svals[] = {0.1, 0.5, 1.0};
+    for (int i = 0; i < 3; i++) {
+        double sh = svals[i], k = 1 - 0.75 * sh, r3 = 1 / sqrt(3.0);
+        pd_contact r = overlap(t, ORIGIN, t, pose(sh, sh, sh, 1, 0, 0, 0), 0);
+        CHECK(r.hit);
+        CHECK_REL(8.0 / 3.0 * k * k * k, r.volume, 1e-12);
+        CHECK_VEC(0.75 * sh, 0.75 * sh, 0.75 * sh, r.centroid, 1e-12);
+        CHECK_VEC(r3, r3, r3, r.normal, 1e-12);
+        CHECK_REL((4 - 3 * sh) * r3, r.depth, 1e-12);
+    }
+    pd_mesh_destroy(t);
+}
+
+TEST(cube_pressed_into_slab)
+{
+    /* a unit cube sunk h into a wide slab (a wall-like box of large triangles): V = h, the
+     * contact point is the centre of the sunk layer, the normal points from the cube into the
+     * slab (-z) */
+    pd_mesh *c = builtin("cube", 0), *slab = box(-3, -2, -1, 2, 3, 0);
+    double hs[] = {0.01, 0.1, 0.4};
+    for (int i = 0; i < 3; i++) {
+        double h = hs[i];
+        pd_contact r = overlap(c, pose(0.25, -0.5, 0.5 - h, 1, 0, 0, 0), slab, ORIGIN, 0);
+        CHECK(r.hit);
+        CHECK_REL(h, r.volume, 1e-12);
+        CHECK_VEC(0.25, -0.5, -h / 2, r.centroid, 1e-12);
+        CHECK_VEC(0, 0, -1, r.normal, 1e-12);
+        CHECK_REL(h, r.depth, 1e-12);
+        /* and the slab against the cube: the same overlap, the opposite normal */
+        pd_contact s = overlap(slab, ORIGIN, c, pose(0.25, -0.5, 0.5 - h, 1, 0, 0, 0), 0);
+        CHECK_REL(h, s.volume, 1e-12);
+        CHECK_VEC(0, 0, 1, s.normal, 1e-12);
+    }
+    pd_mesh_destroy(c);
+    pd_mesh_destroy(slab);
+}
+
+/* ---- degenerate configurations ---------------------------------------------------------- */
+
+TEST(touching_without_overlap_is_zero)
+{
+    pd_mesh *c = builtin("cube", 0), *t = builtin("tetrahedron", 0);
+    /* face on face (cube resting on cube), edge on edge, vertex on vertex */
+    double offs[][3] = {{0, 0, 1}, {1, 1, 0}, {1, -1, 1}, {1, 0, 0}};
+    for (int i = 0; i < 4; i++) {
+        pd_contact r = overlap(c, ORIGIN, c, pose(offs[i][0], offs[i][1], offs[i][2], 1, 0, 0, 0), 0);
+        CHECK(finite_contact(&r));
+        CHECK(!r.hit);
+        CHECK_NEAR(0, r.volume, 0);
+    }
+    /* a tetrahedron whose lowest edge, (1,-1,-1)-(-1,1,-1), lies on the cube's top face
+     * along its diagonal once lifted by 1.5 */
+    pd_contact r = overlap(c, ORIGIN, t, pose(0, 0, 1.5, 1, 0, 0, 0), 0);
+    CHECK(finite_contact(&r));
+    CHECK(!r.hit);
+    pd_mesh_destroy(c);
+    pd_mesh_destroy(t);
+}
+
+TEST(vertex_exactly_on_face)
+{
+    /* B: a tetrahedron with apex (0,0,0) below a base triangle at z = 1 of area 2 (V_B = 2/3).
+     * Apex on A's top face: touching. Apex sunk by h: the tip, similar to B with ratio h, has
+     * V = (2/3) h^3 and centroid apex + (3/4) h (base centroid direction (0,-1/3,1)). */
+    double v[] = {0, 0, 0, -1, -1, 1, 1, -1, 1, 0, 1, 1};
+    int tri[] = {0, 2, 1, 0, 3, 2, 0, 1, 3, 1, 2, 3};
+    pd_mesh *c = builtin("cube", 0), *b = NULL;
+    pd_error err = {0};
+    CHECK(pd_mesh_from_arrays(v, 4, tri, 4, "tip", &b, &err) == PD_OK);
+    if (!b) return;
+    pd_contact r = overlap(c, ORIGIN, b, pose(0.125, 0.25, 0.5, 1, 0, 0, 0), 0);
+    CHECK(finite_contact(&r));
+    CHECK(!r.hit);
+    double h = 0.25;
+    r = overlap(c, ORIGIN, b, pose(0.125, 0.25, 0.5 - h, 1, 0, 0, 0), 0);
+    CHECK(r.hit);
+    CHECK_REL(2.0 / 3.0 * h * h * h, r.volume, 1e-12);
+    CHECK_VEC(0.125, 0.25 - h / 4, 0.5 - h / 4, r.centroid, 1e-12);
+    CHECK_REL(h, r.depth * r.normal[2], 1e-12); /* extent along z of the tip */
+    CHECK(r.normal[2] > 0);
+    pd_mesh_destroy(c);
+    pd_mesh_destroy(b);
+}
+
+TEST(identical_coincident_shapes)
+{
+    const char *names[] = {"cube", "tetrahedron", "schonhardt", "rock"};
+    for (int i = 0; i < 4; i++) {
+        pd_mesh *m = builtin(names[i], 0);
+        pd_mass_props mp;
+        pd_mesh_mass_props(m, &mp);
+        pd_pose p = pose(0.5, -2, 3, 0.5, 0.5, -0.5, 0.5);
+        /* the same pose, and the same orientation written as 3q: equal only up to rounding */
+        pd_pose p3 = pose(0.5, -2, 3, 1.5 * 0.9, 1.5 * 0.9, -1.5 * 0.9, 1.5 * 0.9);
+        double q[4];
+        rnd_quat(q);
+        pd_pose pr = pose(0.1, 0.2, 0.3, q[0], q[1], q[2], q[3]);
+        pd_pose pr3 = pose(0.1, 0.2, 0.3, 3 * q[0], 3 * q[1], 3 * q[2], 3 * q[3]);
+        pd_contact r3 = overlap(m, p, m, p3, 0), rr = overlap(m, pr, m, pr3, 0);
+        CHECK(finite_contact(&r3) && finite_contact(&rr));
+        CHECK_REL(mp.volume, r3.volume, 1e-12);
+        CHECK_REL(mp.volume, rr.volume, 1e-12);
+        pd_contact r = overlap(m, p, m, p, 0);
+        CHECK(finite_contact(&r));
+        CHECK(r.hit);
+        CHECK_REL(mp.volume, r.volume, 1e-12);
+        /* the centroid of the shape itself, placed by the pose */
+        double R[3][3], cw[3];
+        pd_quat_to_matrix(p.q, R);
+        for (int k = 0; k < 3; k++)
+            cw[k] = R[k][0] * mp.centroid[0] + R[k][1] * mp.centroid[1] +
+                    R[k][2] * mp.centroid[2] + p.x[k];
+        CHECK_VEC(cw[0], cw[1], cw[2], r.centroid, 1e-12);
+        double nn = sqrt(r.normal[0] * r.normal[0] + r.normal[1] * r.normal[1] +
+                         r.normal[2] * r.normal[2]);
+        CHECK_NEAR(1, nn, 1e-12);
+        CHECK(r.depth > 0);
+        pd_mesh_destroy(m);
+    }
+}
+
+TEST(edge_on_edge_crossing)
+{
+    /* B = cube turned 90 degrees about x then shifted so its edges lie exactly on A's edges
+     * and faces: the same box as the plain offset, every edge of one meeting the other's */
+    pd_mesh *c = builtin("cube", 0);
+    double s = sqrt(0.5);
+    pd_contact r = overlap(c, ORIGIN, c, pose(0.5, 0.5, 0, s, s, 0, 0), 0);
+    CHECK(r.hit);
+    CHECK_NEAR(0.25, r.volume, 1e-12);
+    CHECK_VEC(0.25, 0.25, 0, r.centroid, 1e-12);
+    CHECK_VEC(sqrt(0.5), sqrt(0.5), 0, r.normal, 1e-12);
+    pd_mesh_destroy(c);
+}
+
+/* World point R(q) v + x. */
+static void place(const double q[4], const double *x, const double *v, double *out)
+{
+    double R[3][3];
+    pd_quat_to_matrix(q, R);
+    for (int i = 0; i < 3; i++) out[i] = R[i][0] * v[0] + R[i][1] * v[1] + R[i][2] * v[2] + x[i];
+}
+
+TEST(near_degenerate_poses_from_rounding)
+{
+    /* Rotated copies placed through floating-point rotations are degenerate only up to
+     * rounding (1e-16 m); they must behave as the exact configurations, not as noise. */
+    pd_mesh *c = builtin("cube", 0);
+    for (int trial = 0; trial < 10; trial++) {
+        double q[4], x[3] = {0.3, -0.1, 0.2}, xb[3];
+        rnd_quat(q);
+        pd_pose pa = pose(x[0], x[1], x[2], q[0], q[1], q[2], q[3]);
+        /* resting face on face: B one side length along A's rotated z */
+        double up[3] = {0, 0, 1}, side[3] = {0.5, 0, 0}, ex[3] = {1, 0, 0}, nx[3];
+        place(q, x, up, xb);
+        pd_contact r = overlap(c, pa, c, pose(xb[0], xb[1], xb[2], q[0], q[1], q[2], q[3]), 0);
+        CHECK(finite_contact(&r));
+        CHECK(!r.hit || r.volume < 1e-12);
+        /* half a side along A's rotated x: the offset-cube box in A's frame */
+        place(q, x, side, xb);
+        r = overlap(c, pa, c, pose(xb[0], xb[1], xb[2], q[0], q[1], q[2], q[3]), 0);
+        CHECK(r.hit);
+        CHECK_NEAR(0.5, r.volume, 1e-12);
+        double zero[3] = {0, 0, 0};
+        place(q, zero, ex, nx);
+        CHECK_VEC(nx[0], nx[1], nx[2], r.normal, 1e-9);
+        CHECK_NEAR(0.5, r.depth, 1e-9);
+        /* the same orientation written as 3q (normalised with rounding): near-coincident */
+        r = overlap(c, pa, c, pose(x[0], x[1], x[2], 3 * q[0], 3 * q[1], 3 * q[2], 3 * q[3]), 0);
+        CHECK(finite_contact(&r));
+        CHECK_NEAR(1, r.volume, 1e-12);
+    }
+    /* a cube tilted by 1e-15 rad lying on a slab: touching, then sunk by 1e-3 m */
+    pd_mesh *slab = box(-3, -3, -1, 3, 3, 0);
+    double t = 0.5e-15;
+    pd_contact r = overlap(c, pose(0, 0, 0.5, cos(t), sin(t), 0, 0), slab, ORIGIN, 0);
+    CHECK(finite_contact(&r));
+    CHECK(!r.hit || r.volume < 1e-12);
+    r = overlap(c, pose(0, 0, 0.5 - 1e-3, cos(t), sin(t), 0, 0), slab, ORIGIN, 0);
+    CHECK_REL(1e-3, r.volume, 1e-9);
+    CHECK_VEC(0, 0, -1, r.normal, 1e-9);
+    pd_mesh_destroy(slab);
+    pd_mesh_destroy(c);
+}
+
+/* ---- symmetry, invariance, filter ------------------------------------------------------- */
+
+/* A random pose of B near A, at a distance where they overlap by a few percent of size. */
+static pd_pose near_pose(double dist)
+{
+    double q[4], dir[3], n;
+    rnd_quat(q);
+    do {
+        for (int k = 0; k < 3; k++) dir[k] = 2 * rnd() - 1;
+        n = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
+    } while (n < 0.1 || n > 1);
+    return pose(dist * dir[0] / n, dist * dir[1] / n, dist * dir[2] / n, q[0], q[1], q[2], q[3]);
+}
+
+TEST(swap_gives_same_volume_and_opposite_normal)
+{
+    const char *names[] = {"schonhardt", "rock", "icosphere", "cube"};
+    int hits = 0;
+    for (int i = 0; i < 4; i++) {
+        pd_mesh *m = builtin(names[i], 0);
+        for (int trial = 0; trial < 20; trial++) {
+            double q[4];
+            rnd_quat(q);
+            pd_pose pa = pose(0.1, 0.2, 0.3, q[0], q[1], q[2], q[3]);
+            pd_pose pb = near_pose(0.8);
+            pb.x[0] += 0.1, pb.x[1] += 0.2, pb.x[2] += 0.3;
+            pd_contact ab = overlap(m, pa, m, pb, 0), ba = overlap(m, pb, m, pa, 0);
+            CHECK(finite_contact(&ab) && finite_contact(&ba));
+            CHECK_EQ_INT(ab.hit, ba.hit);
+            if (!ab.hit || !ba.hit) continue;
+            hits++;
+            CHECK_REL(ab.volume, ba.volume, 1e-10);
+            CHECK_VEC(ab.centroid[0], ab.centroid[1], ab.centroid[2], ba.centroid, 1e-10);
+            CHECK_VEC(-ab.normal[0], -ab.normal[1], -ab.normal[2], ba.normal, 1e-9);
+            CHECK_REL(ab.depth, ba.depth, 1e-9);
+        }
+        pd_mesh_destroy(m);
+    }
+    CHECK(hits > 40); /* the trials must actually exercise overlaps */
+}
+
+/* Applies world motion (R, x) to a pose. */
+static pd_pose moved(pd_pose p, const double q[4], const double x[3])
+{
+    double R[3][3];
+    pd_quat_to_matrix(q, R);
+    pd_pose r;
+    for (int i = 0; i < 3; i++)
+        r.x[i] = R[i][0] * p.x[0] + R[i][1] * p.x[1] + R[i][2] * p.x[2] + x[i];
+    /* q_r = q * p.q */
+    const double *a = q, *b = p.q;
+    r.q[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3];
+    r.q[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2];
+    r.q[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1];
+    r.q[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0];
+    return r;
+}
+
+TEST(invariant_under_common_rigid_motion_even_1e3_m_away)
+{
+    pd_mesh *m = builtin("rock", 80);
+    double far[][3] = {{0.3, -0.2, 0.1}, {1e3, -1e3, 1e3}, {1e3, 0, 0}};
+    int hits = 0;
+    for (int trial = 0; trial < 10; trial++) {
+        pd_pose pa = ORIGIN, pb = near_pose(0.8);
+        pd_contact ref = overlap(m, pa, m, pb, 0);
+        if (!ref.hit) continue;
+        hits++;
+        for (int f = 0; f < 3; f++) {
+            double q[4], R[3][3];
+            rnd_quat(q);
+            pd_quat_to_matrix(q, R);
+            pd_contact r = overlap(m, moved(pa, q, far[f]), m, moved(pb, q, far[f]), 0);
+            CHECK(r.hit);
+            /* 1e3 m away, positions carry ~1e3 * 2^-52 = 2e-13 m of round-off; the overlap is
+             * computed in A's frame, so V keeps ~1e-10 relative (figure 5.4's lesson) */
+            CHECK_REL(ref.volume, r.volume, 1e-9);
+            for (int i = 0; i < 3; i++) {
+                double c = R[i][0] * ref.centroid[0] + R[i][1] * ref.centroid[1] +
+                           R[i][2] * ref.centroid[2] + far[f][i];
+                double n = R[i][0] * ref.normal[0] + R[i][1] * ref.normal[1] +
+                           R[i][2] * ref.normal[2];
+                CHECK_NEAR(c, r.centroid[i], 1e-9);
+                CHECK_NEAR(n, r.normal[i], 1e-8);
+            }
+            CHECK_REL(ref.depth, r.depth, 1e-8);
+        }
+    }
+    CHECK(hits >= 5);
+    pd_mesh_destroy(m);
+}
+
+TEST(filter_on_and_off_agree)
+{
+    const char *names[] = {"schonhardt", "rock", "icosphere"};
+    int hits = 0, filtered = 0;
+    for (int i = 0; i < 3; i++) {
+        pd_mesh *m = builtin(names[i], i == 2 ? 320 : 0);
+        for (int trial = 0; trial < 20; trial++) {
+            pd_pose pb = near_pose(i == 2 ? 1.9 : 0.85);
+            pd_contact on = overlap(m, ORIGIN, m, pb, 0);
+            pd_contact off = overlap(m, ORIGIN, m, pb, PD_OVERLAP_NO_FILTER);
+            CHECK_EQ_INT(off.hit, on.hit);
+            if (!on.hit) continue;
+            hits++;
+            filtered += on.tris_a < m->ntris;
+            /* the filter only removes triangles that contribute no cusp: identical sums */
+            CHECK_NEAR(off.volume, on.volume, 1e-15 * off.volume);
+            CHECK_VEC(off.centroid[0], off.centroid[1], off.centroid[2], on.centroid, 1e-14);
+            CHECK_VEC(off.normal[0], off.normal[1], off.normal[2], on.normal, 1e-14);
+            CHECK_NEAR(off.depth, on.depth, 1e-14);
+        }
+        pd_mesh_destroy(m);
+    }
+    CHECK(hits > 20);
+    CHECK(filtered > 10); /* and the filter really did remove triangles */
+}
+
+/* ---- independent cross-check of non-convex overlaps ------------------------------------- */
+
+static void compare_with_reference(const char *na, int ta, const char *nb, int tb, double dist,
+                                   int trials, int *hits)
+{
+    pd_mesh *a = builtin(na, ta), *b = builtin(nb, tb);
+    pd_mass_props ma, mb;
+    pd_mesh_mass_props(a, &ma);
+    pd_mesh_mass_props(b, &mb);
+    for (int trial = 0; trial < trials; trial++) {
+        double q[4];
+        rnd_quat(q);
+        pd_pose pa = pose(0.01, 0.02, -0.03, q[0], q[1], q[2], q[3]);
+        pd_pose pb = near_pose(dist);
+        pd_contact r = overlap(a, pa, b, pb, 0);
+        double Ra[3][3], Rb[3][3], oa[3], ob[3];
+        pd_quat_to_matrix(pa.q, Ra);
+        pd_quat_to_matrix(pb.q, Rb);
+        /* apexes at the posed centroids (any point gives a valid signed decomposition) */
+        for (int i = 0; i < 3; i++) {
+            oa[i] = pa.x[i] + Ra[i][0] * ma.centroid[0] + Ra[i][1] * ma.centroid[1] +
+                    Ra[i][2] * ma.centroid[2];
+            ob[i] = pb.x[i] + Rb[i][0] * mb.centroid[0] + Rb[i][1] * mb.centroid[1] +
+                    Rb[i][2] * mb.centroid[2];
+        }
+        ref_result ref;
+        ref_overlap(a, Ra, pa.x, oa, b, Rb, pb.x, ob, &ref);
+        double vmin = ma.volume < mb.volume ? ma.volume : mb.volume;
+        if (ref.volume < 1e-6 * vmin) { /* a graze: only demand agreement on "small" */
+            CHECK(!r.hit || r.volume < 1e-5 * vmin);
+            continue;
+        }
+        (*hits)++;
+        CHECK(r.hit);
+        CHECK_REL(ref.volume, r.volume, 1e-9);
+        CHECK_VEC(ref.centroid[0], ref.centroid[1], ref.centroid[2], r.centroid, 1e-9);
+        CHECK_VEC(ref.normal[0], ref.normal[1], ref.normal[2], r.normal, 1e-8);
+        if (ref.depth_valid) CHECK_REL(ref.depth, r.depth, 1e-8);
+    }
+    pd_mesh_destroy(a);
+    pd_mesh_destroy(b);
+}
+
+TEST(schonhardt_pairs_match_tetrahedral_reference)
+{
+    int hits = 0;
+    compare_with_reference("schonhardt", 0, "schonhardt", 0, 1.0, 40, &hits);
+    CHECK(hits > 15);
+}
+
+TEST(rock_pairs_match_tetrahedral_reference)
+{
+    int hits = 0;
+    compare_with_reference("rock", 80, "rock", 320, 0.8, 15, &hits);
+    compare_with_reference("rock", 20, "schonhardt", 0, 0.9, 15, &hits);
+    CHECK(hits > 15);
+}
+
+TEST(rock_against_closed_wall_mesh)
+{
+    /* particle against a closed triangle-mesh wall (section 5.6): a rock pressed into a wide
+     * box whose faces are a few large triangles, checked against the reference; the normal
+     * points from the particle into the wall */
+    pd_mesh *rock = builtin("rock", 80), *wall = box(-5, -5, -2, 5, 5, 0);
+    int hits = 0;
+    for (int trial = 0; trial < 10; trial++) {
+        double q[4], Ra[3][3], I[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+        rnd_quat(q);
+        pd_pose pa = pose(0.2 * rnd(), 0.2 * rnd(), 0.35 + 0.1 * rnd(), q[0], q[1], q[2], q[3]);
+        pd_contact r = overlap(rock, pa, wall, ORIGIN, 0);
+        pd_quat_to_matrix(pa.q, Ra);
+        double o[3] = {0, 0, -1};
+        ref_result ref;
+        ref_overlap(rock, Ra, pa.x, pa.x, wall, I, ORIGIN.x, o, &ref);
+        if (ref.volume < 1e-6) continue;
+        hits++;
+        CHECK_REL(ref.volume, r.volume, 1e-9);
+        CHECK_VEC(ref.centroid[0], ref.centroid[1], ref.centroid[2], r.centroid, 1e-9);
+        CHECK_VEC(0, 0, -1, r.normal, 1e-9); /* a flat wall: the normal is the wall's */
+    }
+    CHECK(hits >= 5);
+    pd_mesh_destroy(rock);
+    pd_mesh_destroy(wall);
+}
+
+/* ---- convergence to the sphere ---------------------------------------------------------- */
+
+TEST(icosphere_overlap_converges_to_spherical_caps)
+{
+    /* two spheres of radius R at distance 2R - delta overlap in two caps of height delta/2:
+     * V = 2 pi h^2 (3R - h) / 3. Icospheres are scaled to the sphere's volume (as the thesis's
+     * section 6.1 normalises) and the error must fall with every subdivision; the observed rate
+     * is about 4x per level (error ~ edge^2), and level 4 must be within 2 %. */
+    double R = 1, delta = 0.2, h = delta / 2, exact = 2 * PI * h * h * (3 * R - h) / 3;
+    int levels[] = {80, 320, 1280, 5120};
+    double prev = 1e9;
+    for (int l = 0; l < 4; l++) {
+        pd_mesh *m = builtin("icosphere", levels[l]);
+        pd_mass_props mp;
+        pd_mesh_mass_props(m, &mp);
+        double s = cbrt(4.0 / 3.0 * PI / mp.volume);
+        for (int i = 0; i < 3 * m->nverts; i++) m->verts[i] *= s;
+        /* average over orientations: the faceting error depends on which feature faces */
+        double err = 0;
+        int n = 8;
+        for (int t = 0; t < n; t++) {
+            double qa[4], qb[4];
+            rnd_quat(qa);
+            rnd_quat(qb);
+            pd_contact r = overlap(m, pose(0, 0, 0, qa[0], qa[1], qa[2], qa[3]), m,
+                                   pose(2 * R - delta, 0, 0, qb[0], qb[1], qb[2], qb[3]), 0);
+            err += fabs(r.volume - exact) / exact / n;
+        }
+        printf("  icosphere %4d triangles: mean |V - V_caps| / V_caps = %.4f\n", levels[l], err);
+        CHECK(err < prev);
+        prev = err;
+        pd_mesh_destroy(m);
+    }
+    CHECK(prev < 0.02);
+}
+
+/* ---- precision and OpenCL ---------------------------------------------------------------- */
+
+TEST(single_precision_close_to_double)
+{
+    pd_mesh *m = builtin("rock", 80);
+    int hits = 0;
+    for (int trial = 0; trial < 20; trial++) {
+        pd_pose pb = near_pose(0.8);
+        pd_contact d = overlap(m, ORIGIN, m, pb, 0);
+        pd_contact s = overlap(m, ORIGIN, m, pb, PD_OVERLAP_SINGLE);
+        if (!d.hit || d.volume < 1e-3) continue;
+        hits++;
+        /* float carries 2^-23 = 1.2e-7; the cusp sums cancel O(size^3) terms down to V, so
+         * about 1e-7 * size^3 / V relative, below 1e-3 for overlaps above 1e-3 of the volume */
+        CHECK_REL(d.volume, s.volume, 1e-3);
+        CHECK_VEC(d.normal[0], d.normal[1], d.normal[2], s.normal, 1e-3);
+    }
+    CHECK(hits > 5);
+    pd_mesh_destroy(m);
+}
+
+TEST(opencl_kernel_agrees_with_host)
+{
+    pd_device *dev = NULL;
+    pd_error err = {0};
+    if (pd_device_open(-1, &dev, &err) != PD_OK) {
+        TEST_FAILF("no OpenCL device: %s", err.msg);
+        return;
+    }
+    const char *names[] = {"schonhardt", "rock", "cube"};
+    int hits = 0;
+    for (int i = 0; i < 3; i++) {
+        pd_mesh *m = builtin(names[i], 0);
+        for (int trial = 0; trial < 6; trial++) {
+            pd_pose pa = near_pose(0.1), pb = near_pose(0.8);
+            pd_contact h = overlap(m, pa, m, pb, 0), c;
+            if (pd_overlap_cl(dev, m, &pa, m, &pb, 0, &c, &err) != PD_OK) {
+                TEST_FAILF("pd_overlap_cl: %s", err.msg);
+                break;
+            }
+            CHECK_EQ_INT(h.hit, c.hit);
+            if (!h.hit) continue;
+            hits++;
+            /* the contract: 1e-12 relative in double precision */
+            CHECK_REL(h.volume, c.volume, 1e-12);
+            CHECK_VEC(h.centroid[0], h.centroid[1], h.centroid[2], c.centroid, 1e-12);
+            CHECK_VEC(h.normal[0], h.normal[1], h.normal[2], c.normal, 1e-12);
+            CHECK_REL(h.depth, c.depth, 1e-12);
+            if (pd_overlap_cl(dev, m, &pa, m, &pb, PD_OVERLAP_SINGLE, &c, &err) == PD_OK)
+                CHECK_REL(h.volume, c.volume, 2e-3);
+        }
+        pd_mesh_destroy(m);
+    }
+    CHECK(hits > 5);
+    pd_device_close(dev);
+}
+
+TEST(bad_pose_is_an_error_not_a_nan)
+{
+    pd_mesh *c = builtin("cube", 0);
+    pd_pose bad = pose(0, 0, 0, 0, 0, 0, 0);
+    pd_contact r;
+    pd_error err = {0};
+    CHECK_EQ_INT(PD_EINVAL, pd_overlap_host(c, &ORIGIN, c, &bad, 0, &r, &err));
+    CHECK_STR_CONTAINS(err.msg, "quaternion");
+    pd_mesh_destroy(c);
+}
+
+int main(void)
+{
+    RUN(offset_cubes_are_a_box);
+    RUN(rotated_cube_corner_into_face);
+    RUN(tetrahedra_along_a_vertex_direction);
+    RUN(cube_pressed_into_slab);
+    RUN(touching_without_overlap_is_zero);
+    RUN(vertex_exactly_on_face);
+    RUN(identical_coincident_shapes);
+    RUN(edge_on_edge_crossing);
+    RUN(near_degenerate_poses_from_rounding);
+    RUN(swap_gives_same_volume_and_opposite_normal);
+    RUN(invariant_under_common_rigid_motion_even_1e3_m_away);
+    RUN(filter_on_and_off_agree);
+    RUN(schonhardt_pairs_match_tetrahedral_reference);
+    RUN(rock_pairs_match_tetrahedral_reference);
+    RUN(rock_against_closed_wall_mesh);
+    RUN(icosphere_overlap_converges_to_spherical_caps);
+    RUN(single_precision_close_to_double);
+    RUN(opencl_kernel_agrees_with_host);
+    RUN(bad_pose_is_an_error_not_a_nan);
+    return TEST_DONE();
+}
