@@ -8,7 +8,9 @@
  * the engine will) with the half-plane filter on and off, and the OpenCL kernel on the default
  * device for a batch of pairs (one work-item per pair, buffers and transfers included).
  *
- * usage: build/bench/overlap [--quick] [--no-opencl] [--markdown]
+ * usage: build/bench/overlap [--quick] [--no-opencl] [--no-filter-off] [--only SHAPE] [--reps N]
+ * --reps N runs exactly N passes over the configurations (for instruction counts under
+ * valgrind --tool=callgrind, which repeat exactly where wall time does not).
  */
 #define PD_DOUBLE 1
 #include <stdint.h>
@@ -48,7 +50,8 @@ static void rnd_unit(double *v, int n)
             s += v[k] * v[k];
         }
     } while (s < 0.01 || s > 1);
-    for (int k = 0; k < n; k++) v[k] /= sqrt(s);
+    for (int k = 0; k < n; k++)
+        v[k] /= sqrt(s);
 }
 
 typedef struct {
@@ -73,14 +76,16 @@ static int make_configs(const pd_mesh *m, configs *cf)
         pd_contact c;
         for (int it = 0; it < 50; it++) {
             double mid = 0.5 * (lo + hi);
-            for (int k = 0; k < 3; k++) pb.x[k] = mid * u[k];
+            for (int k = 0; k < 3; k++)
+                pb.x[k] = mid * u[k];
             pd_overlap_host(m, &pa, m, &pb, 0, &c, NULL);
             if (c.hit && c.depth > target)
                 lo = mid;
             else
                 hi = mid;
         }
-        for (int k = 0; k < 3; k++) pb.x[k] = lo * u[k];
+        for (int k = 0; k < 3; k++)
+            pb.x[k] = lo * u[k];
         pd_overlap_host(m, &pa, m, &pb, 0, &c, NULL);
         if (!c.hit || fabs(c.depth - target) > 0.1 * target) continue;
         if (ovl_setup_make(m, &pa, m, &pb, 0, &cf->s[n], NULL) != PD_OK) continue;
@@ -90,12 +95,14 @@ static int make_configs(const pd_mesh *m, configs *cf)
 }
 
 /* Host timing: ns per overlap over all configs, repeated for at least min_time seconds. */
+static long fixed_reps = 0;
+
 static double time_host(configs *cf, int n, int flags, double min_time, double *kept)
 {
     ovl_setup *s0 = &cf->s[0];
     int cap = ovl_pts_cap(s0->nta, s0->ntb);
     int *iscr = malloc(sizeof(int) * ovl_iscratch_len(s0->nta, s0->ntb, s0->nva, s0->nvb));
-    double *rscr = malloc(sizeof(double) * ovl_rscratch_len(s0->nva, s0->nvb, cap));
+    double *rscr = malloc(sizeof(double) * ovl_rscratch_len(s0->nva, s0->nvb, s0->ntb, cap));
     ovl_in in[NCONF];
     for (int i = 0; i < n; i++) {
         ovl_setup *s = &cf->s[i];
@@ -129,7 +136,7 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
         }
         reps++;
         t = now() - t0;
-    } while (t < min_time);
+    } while (fixed_reps ? reps < fixed_reps : t < min_time);
     if (sink < 0) printf(" ");
     *kept = kept_sum / (reps * n);
     free(iscr);
@@ -140,8 +147,15 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
 /* OpenCL timing: ns per overlap for a batch of `batch` pairs cycling through the configs. */
 static double time_cl(pd_device *dev, configs *cf, int n, int dbl, int batch, double min_time)
 {
+    /* keep each work-item's scratch within 256 MiB in all */
+    size_t ints, reals;
+    ovl_scratch_len(&cf->s[0], &ints, &reals);
+    size_t per = sizeof(double) * reals + sizeof(int) * ints;
+    while (batch > 64 && per * batch > ((size_t)256 << 20))
+        batch /= 2;
     double *xf = malloc(sizeof(double) * 18 * batch), *out = malloc(sizeof(double) * 12 * batch);
-    for (int i = 0; i < batch; i++) ovl_setup_pack(&cf->s[i % n], xf + 18 * i);
+    for (int i = 0; i < batch; i++)
+        ovl_setup_pack(&cf->s[i % n], xf + 18 * i);
     pd_error err = {0};
     /* warm-up: compiles the program */
     if (ovl_run_cl(dev, &cf->s[0], xf, batch, dbl, out, &err) != PD_OK) {
@@ -164,14 +178,24 @@ static double time_cl(pd_device *dev, configs *cf, int n, int dbl, int batch, do
 
 int main(int argc, char **argv)
 {
-    int quick = 0, use_cl = 1;
+    int quick = 0, use_cl = 1, skip_off = 0;
+    const char *only = NULL;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick"))
             quick = 1;
         else if (!strcmp(argv[i], "--no-opencl"))
             use_cl = 0;
+        else if (!strcmp(argv[i], "--no-filter-off"))
+            skip_off = 1;
+        else if (!strcmp(argv[i], "--reps") && i + 1 < argc)
+            fixed_reps = atol(argv[++i]);
+        else if (!strcmp(argv[i], "--only") && i + 1 < argc)
+            only = argv[++i];
         else {
-            fprintf(stderr, "usage: %s [--quick] [--no-opencl]\n", argv[0]);
+            fprintf(
+                stderr,
+                "usage: %s [--quick] [--no-opencl] [--no-filter-off] [--only SHAPE] [--reps N]\n",
+                argv[0]);
             return 2;
         }
     }
@@ -188,14 +212,20 @@ int main(int argc, char **argv)
     }
     printf("# polydem overlap benchmark: pairs at depth 1%% of the volume-equivalent diameter\n");
     printf("# host: one core, double precision, ovl_compute with preallocated scratch\n");
-    if (use_cl) printf("# opencl: %s, batch of 4096 pairs, transfers included\n", pd_device_name(dev));
-    printf("| shape | triangles | kept tris/pair (filter) | host ns, filter on | host ns, filter off "
-           "| opencl ns double | opencl ns single |\n");
+    if (use_cl)
+        printf("# opencl: %s, batches of up to 4096 pairs, transfers included\n",
+               pd_device_name(dev));
+    printf(
+        "| shape | triangles | kept tris/pair (filter) | host ns, filter on | host ns, filter off "
+        "| opencl ns double | opencl ns single |\n");
     printf("|---|---|---|---|---|---|---|\n");
     static configs cf;
     double t80 = 0, t1280 = 0;
     for (size_t k = 0; k < sizeof shapes / sizeof shapes[0]; k++) {
         pd_mesh *m = NULL;
+        char label[32];
+        snprintf(label, sizeof label, "%s%d", shapes[k].name, shapes[k].tris ? shapes[k].tris : 8);
+        if (only && strcmp(only, shapes[k].name) && strcmp(only, label)) continue;
         if (pd_mesh_builtin(shapes[k].name, shapes[k].tris, 1, &m, &err) != PD_OK) {
             fprintf(stderr, "bench: %s\n", err.msg);
             return 1;
@@ -207,22 +237,34 @@ int main(int argc, char **argv)
         }
         double kept_on, kept_off;
         double on = time_host(&cf, n, 0, min_time, &kept_on);
-        double off = time_host(&cf, n, OVL_NO_FILTER, min_time, &kept_off);
+        double off = skip_off ? -1 : time_host(&cf, n, OVL_NO_FILTER, min_time, &kept_off);
         double cld = -1, clf = -1;
         if (use_cl) {
             if (pd_device_has_fp64(dev)) cld = time_cl(dev, &cf, n, 1, 4096, min_time);
             clf = time_cl(dev, &cf, n, 0, 4096, min_time);
         }
-        printf("| %s | %d | %.1f | %.0f | %.0f | ", shapes[k].name, m->ntris, kept_on, on, off);
-        if (cld > 0) printf("%.0f | ", cld); else printf("- | ");
-        if (clf > 0) printf("%.0f |\n", clf); else printf("- |\n");
+        printf("| %s | %d | %.1f | %.0f | ", shapes[k].name, m->ntris, kept_on, on);
+        if (off > 0)
+            printf("%.0f | ", off);
+        else
+            printf("- | ");
+        if (cld > 0)
+            printf("%.0f | ", cld);
+        else
+            printf("- | ");
+        if (clf > 0)
+            printf("%.0f |\n", clf);
+        else
+            printf("- |\n");
         fflush(stdout);
         if (shapes[k].tris == 80) t80 = on;
         if (shapes[k].tris == 1280) t1280 = on;
-        for (int i = 0; i < n; i++) ovl_setup_free(&cf.s[i]);
+        for (int i = 0; i < n; i++)
+            ovl_setup_free(&cf.s[i]);
         pd_mesh_destroy(m);
     }
-    printf("\nicosphere 1280 / 80 host time ratio (filter on): %.2f\n", t1280 / t80);
+    if (t80 > 0 && t1280 > 0)
+        printf("\nicosphere 1280 / 80 host time ratio (filter on): %.2f\n", t1280 / t80);
     pd_device_close(dev);
     return 0;
 }

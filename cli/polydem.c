@@ -47,14 +47,16 @@ static int parse_numbers(const char *s, double *out, int n)
 {
     const char *p = s;
     for (int i = 0; i < n; i++) {
-        while (*p == ' ' || *p == '\t' || *p == ',') p++;
+        while (*p == ' ' || *p == '\t' || *p == ',')
+            p++;
         char *end;
         errno = 0;
         out[i] = strtod(p, &end);
         if (end == p || errno == ERANGE || !isfinite(out[i])) return -1;
         p = end;
     }
-    while (*p == ' ' || *p == '\t' || *p == ',') p++;
+    while (*p == ' ' || *p == '\t' || *p == ',')
+        p++;
     return *p ? -1 : 0;
 }
 
@@ -64,10 +66,11 @@ static int parse_pose(const char *flag, const char *s, pd_pose *pose)
     if (parse_numbers(s, v, 7) != 0)
         return fail("%s: expected 7 numbers \"x y z qw qx qy qz\", got \"%s\"", flag, s);
     double qn = sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
-    if (!(qn > 0) || !isfinite(qn))
-        return fail("%s: quaternion \"%s\" has zero length", flag, s);
-    for (int k = 0; k < 3; k++) pose->x[k] = v[k];
-    for (int k = 0; k < 4; k++) pose->q[k] = v[3 + k] / qn;
+    if (!(qn > 0) || !isfinite(qn)) return fail("%s: quaternion \"%s\" has zero length", flag, s);
+    for (int k = 0; k < 3; k++)
+        pose->x[k] = v[k];
+    for (int k = 0; k < 4; k++)
+        pose->q[k] = v[3 + k] / qn;
     return 0;
 }
 
@@ -96,7 +99,8 @@ static int cmd_overlap(int argc, char **argv)
             char *end;
             if (i + 1 >= argc) return fail("%s: missing value%s", a, "");
             device = (int)strtol(argv[++i], &end, 10);
-            if (*end || device < 0) return fail("--device: expected a device index, got \"%s\"%s", argv[i], "");
+            if (*end || device < 0)
+                return fail("--device: expected a device index, got \"%s\"%s", argv[i], "");
         } else if (a[0] == '-' && a[1]) {
             return fail("overlap: unknown option \"%s\"%s", a, "");
         } else if (nfiles < 2) {
@@ -147,7 +151,8 @@ done:
 
 static int cmd_mesh_info(int argc, char **argv)
 {
-    if (argc != 3) return fail("mesh-info: exactly one mesh expected (FILE or builtin:NAME)%s%s", "", "");
+    if (argc != 3)
+        return fail("mesh-info: exactly one mesh expected (FILE or builtin:NAME)%s%s", "", "");
     pd_error err = {0};
     pd_mesh *m = NULL;
     if (pd_mesh_open(argv[2], &m, &err) != PD_OK) {
@@ -157,7 +162,8 @@ static int cmd_mesh_info(int argc, char **argv)
     pd_mass_props mp;
     pd_mesh_mass_props(m, &mp);
     double lo[3], hi[3];
-    for (int k = 0; k < 3; k++) lo[k] = hi[k] = m->verts[k];
+    for (int k = 0; k < 3; k++)
+        lo[k] = hi[k] = m->verts[k];
     for (int i = 0; i < m->nverts; i++)
         for (int k = 0; k < 3; k++) {
             double v = m->verts[3 * i + k];

@@ -3,7 +3,8 @@
  * overlap kernel's host side (ovl_run_cl, pd_overlap_cl).
  *
  * The kernel sources are embedded at build time (tools/embed_cl.sh), so the binaries run from any
- * directory. Programs are compiled once per precision, on first use, and kept for the device's life.
+ * directory. Programs are compiled once per precision, on first use, and kept for the device's
+ * life.
  */
 #define CL_TARGET_OPENCL_VERSION 120
 #include <CL/cl.h>
@@ -27,17 +28,28 @@ struct pd_device {
 static const char *cl_errstr(cl_int e)
 {
     switch (e) {
-    case CL_DEVICE_NOT_FOUND: return "CL_DEVICE_NOT_FOUND";
-    case CL_OUT_OF_RESOURCES: return "CL_OUT_OF_RESOURCES";
-    case CL_OUT_OF_HOST_MEMORY: return "CL_OUT_OF_HOST_MEMORY";
-    case CL_MEM_OBJECT_ALLOCATION_FAILURE: return "CL_MEM_OBJECT_ALLOCATION_FAILURE";
-    case CL_BUILD_PROGRAM_FAILURE: return "CL_BUILD_PROGRAM_FAILURE";
-    case CL_INVALID_VALUE: return "CL_INVALID_VALUE";
-    case CL_INVALID_BUFFER_SIZE: return "CL_INVALID_BUFFER_SIZE";
-    case CL_INVALID_KERNEL_ARGS: return "CL_INVALID_KERNEL_ARGS";
-    case CL_INVALID_WORK_GROUP_SIZE: return "CL_INVALID_WORK_GROUP_SIZE";
-    case -1001: return "CL_PLATFORM_NOT_FOUND_KHR (no OpenCL driver installed)";
-    default: return "OpenCL error";
+    case CL_DEVICE_NOT_FOUND:
+        return "CL_DEVICE_NOT_FOUND";
+    case CL_OUT_OF_RESOURCES:
+        return "CL_OUT_OF_RESOURCES";
+    case CL_OUT_OF_HOST_MEMORY:
+        return "CL_OUT_OF_HOST_MEMORY";
+    case CL_MEM_OBJECT_ALLOCATION_FAILURE:
+        return "CL_MEM_OBJECT_ALLOCATION_FAILURE";
+    case CL_BUILD_PROGRAM_FAILURE:
+        return "CL_BUILD_PROGRAM_FAILURE";
+    case CL_INVALID_VALUE:
+        return "CL_INVALID_VALUE";
+    case CL_INVALID_BUFFER_SIZE:
+        return "CL_INVALID_BUFFER_SIZE";
+    case CL_INVALID_KERNEL_ARGS:
+        return "CL_INVALID_KERNEL_ARGS";
+    case CL_INVALID_WORK_GROUP_SIZE:
+        return "CL_INVALID_WORK_GROUP_SIZE";
+    case -1001:
+        return "CL_PLATFORM_NOT_FOUND_KHR (no OpenCL driver installed)";
+    default:
+        return "OpenCL error";
     }
 }
 
@@ -51,8 +63,9 @@ int pd_device_open(int index, pd_device **out, pd_error *err)
     cl_int e = clGetPlatformIDs(16, plats, &nplat);
     *out = NULL;
     if (e != CL_SUCCESS || nplat == 0)
-        return pd_error_set(err, PD_ECL, "opencl: no platform found (%s); install an OpenCL "
-                                         "driver, e.g. pocl-opencl-icd",
+        return pd_error_set(err, PD_ECL,
+                            "opencl: no platform found (%s); install an OpenCL "
+                            "driver, e.g. pocl-opencl-icd",
                             cl_errstr(e));
     /* Enumerate every device of every platform in order. */
     cl_platform_id pick_plat = NULL;
@@ -125,17 +138,22 @@ void pd_device_close(pd_device *dev)
     free(dev);
 }
 
-const char *pd_device_name(const pd_device *dev) { return dev->name; }
-int pd_device_has_fp64(const pd_device *dev) { return dev->fp64; }
+const char *pd_device_name(const pd_device *dev)
+{
+    return dev->name;
+}
+int pd_device_has_fp64(const pd_device *dev)
+{
+    return dev->fp64;
+}
 
 /* Compiles the overlap program for one precision on first use. */
 static int device_program(pd_device *dev, int dbl, pd_error *err)
 {
     if (dev->k_overlap[dbl]) return PD_OK;
     if (dbl && !dev->fp64)
-        return pd_error_set(err, PD_ECL,
-                            "opencl: device '%s' has no cl_khr_fp64; use single precision",
-                            dev->name);
+        return pd_error_set(
+            err, PD_ECL, "opencl: device '%s' has no cl_khr_fp64; use single precision", dev->name);
     const char *src = pd_cl_source_overlap;
     cl_int e;
     cl_program prog = clCreateProgramWithSource(dev->ctx, 1, &src, NULL, &e);
@@ -165,7 +183,8 @@ static void to_real(void *buf, const double *x, size_t n, int dbl)
     if (dbl)
         memcpy(buf, x, n * sizeof(double));
     else
-        for (size_t i = 0; i < n; i++) ((float *)buf)[i] = (float)x[i];
+        for (size_t i = 0; i < n; i++)
+            ((float *)buf)[i] = (float)x[i];
 }
 
 int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs, int dbl,
@@ -175,8 +194,8 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     if (rc != PD_OK) return rc;
     size_t rs = dbl ? sizeof(double) : sizeof(float);
     int cap = ovl_pts_cap(s->nta, s->ntb);
-    size_t ilen = (size_t)(s->nta + s->ntb + s->nva + s->nvb);
-    size_t rlen = (size_t)(s->nva + s->nvb + 3 * s->nvb + 3 * cap);
+    size_t ilen, rlen;
+    ovl_scratch_len(s, &ilen, &rlen);
     size_t n_va = 3 * (size_t)s->nva, n_vb = 3 * (size_t)s->nvb, n_xf = 18 * (size_t)npairs;
     void *hva = malloc(rs * n_va), *hvb = malloc(rs * n_vb), *hxf = malloc(rs * n_xf);
     void *hout = malloc(rs * 12 * (size_t)npairs);
@@ -192,9 +211,11 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     to_real(hxf, xf, n_xf, dbl);
     const cl_mem_flags ro = CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR;
     b[0] = clCreateBuffer(dev->ctx, ro, rs * n_va, hva, &e);
-    if (e == CL_SUCCESS) b[1] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->nta, (void *)s->ta, &e);
+    if (e == CL_SUCCESS)
+        b[1] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->nta, (void *)s->ta, &e);
     if (e == CL_SUCCESS) b[2] = clCreateBuffer(dev->ctx, ro, rs * n_vb, hvb, &e);
-    if (e == CL_SUCCESS) b[3] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->ntb, (void *)s->tb, &e);
+    if (e == CL_SUCCESS)
+        b[3] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->ntb, (void *)s->tb, &e);
     if (e == CL_SUCCESS) b[4] = clCreateBuffer(dev->ctx, ro, rs * n_xf, hxf, &e);
     if (e == CL_SUCCESS)
         b[5] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);

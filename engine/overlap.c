@@ -9,7 +9,7 @@ int ovl_pts_cap(int nta, int ntb)
 {
     /* An overlap's nodes number a few per triangle that reaches into it; beyond this the kernel
      * recomputes the depth in a second sweep instead of storing nodes. */
-    return 64 + 4 * (nta + ntb);
+    return 256 + (nta + ntb) / 2;
 }
 
 /* Unit quaternion of q; 0 when q is zero or not finite. */
@@ -17,7 +17,8 @@ static int quat_normalised(const double q[4], double out[4])
 {
     double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     if (!(n > 0) || !isfinite(n)) return 0;
-    for (int k = 0; k < 4; k++) out[k] = q[k] / n;
+    for (int k = 0; k < 4; k++)
+        out[k] = q[k] / n;
     return 1;
 }
 
@@ -48,7 +49,8 @@ int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const 
     if (!s->va) return pd_error_set(err, PD_ENOMEM, "overlap: out of memory");
     /* A's frame: A's mesh axes, origin at A's centroid (figure 5.4) */
     for (int i = 0; i < a->nverts; i++)
-        for (int k = 0; k < 3; k++) s->va[3 * i + k] = a->verts[3 * i + k] - ma.centroid[k];
+        for (int k = 0; k < 3; k++)
+            s->va[3 * i + k] = a->verts[3 * i + k] - ma.centroid[k];
     s->ta = a->tris;
     s->nva = a->nverts;
     s->nta = a->ntris;
@@ -58,11 +60,14 @@ int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const 
     s->ntb = b->ntris;
     /* p_A = Ra^T (Rb v + xb - xa) - ca = R(conj(qa) qb) v + Ra^T (xb - xa) - ca */
     double dx[3];
-    for (int k = 0; k < 3; k++) dx[k] = pb->x[k] - pa->x[k];
+    for (int k = 0; k < 3; k++)
+        dx[k] = pb->x[k] - pa->x[k];
     for (int i = 0; i < 3; i++) {
         double acc = 0;
-        for (int j = 0; j < 3; j++) s->rot[3 * i + j] = rr[i][j];
-        for (int k = 0; k < 3; k++) acc += s->ra[k][i] * dx[k];
+        for (int j = 0; j < 3; j++)
+            s->rot[3 * i + j] = rr[i][j];
+        for (int k = 0; k < 3; k++)
+            acc += s->ra[k][i] * dx[k];
         s->tr[i] = acc - ma.centroid[i];
     }
     for (int i = 0; i < 3; i++) {

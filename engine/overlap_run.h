@@ -33,6 +33,9 @@ typedef struct ovl_result {
 int ovl_run_f64(const ovl_setup *s, ovl_result *r);
 int ovl_run_f32(const ovl_setup *s, ovl_result *r);
 
+/* Scratch one overlap of s needs: ints and reals (of the kernel's precision). */
+void ovl_scratch_len(const ovl_setup *s, size_t *ints, size_t *reals);
+
 /* Capacity of the node buffer used for the depth; larger overlaps recompute instead. */
 int ovl_pts_cap(int nta, int ntb);
 

@@ -25,15 +25,17 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
     in.tb = tb;
     in.nvb = nvb;
     in.ntb = ntb;
-    for (int i = 0; i < 9; i++) in.rot[i] = x[i];
-    for (int i = 0; i < 3; i++) in.tr[i] = x[9 + i];
+    for (int i = 0; i < 9; i++)
+        in.rot[i] = x[i];
+    for (int i = 0; i < 3; i++)
+        in.tr[i] = x[9 + i];
     in.ca = v3(x[12], x[13], x[14]);
     in.cb = v3(x[15], x[16], x[17]);
     in.vol_a = vol_a;
     in.vol_b = vol_b;
     in.flags = flags;
     in.iscr = iscr + (size_t)g * (size_t)ovl_iscratch_len(nta, ntb, nva, nvb);
-    in.rscr = rscr + (size_t)g * (size_t)ovl_rscratch_len(nva, nvb, pts_cap);
+    in.rscr = rscr + (size_t)g * (size_t)ovl_rscratch_len(nva, nvb, ntb, pts_cap);
     in.pts_cap = pts_cap;
     ovl_out o;
     ovl_compute(&in, &o);

@@ -25,7 +25,12 @@
 #else
 #include <math.h>
 #define PD_GLOBAL
+#if defined(__GNUC__)
+/* the kernels' small helpers must inline on the host as they do on devices */
+#define PD_FN static inline __attribute__((always_inline))
+#else
 #define PD_FN static inline
+#endif
 #if PD_DOUBLE
 #define PD_SQRT(x) sqrt(x)
 #define PD_FABS(x) fabs(x)
@@ -59,21 +64,46 @@ PD_FN pd_v3 v3(pd_real x, pd_real y, pd_real z)
     r.z = z;
     return r;
 }
-PD_FN pd_v3 v3_add(pd_v3 a, pd_v3 b) { return v3(a.x + b.x, a.y + b.y, a.z + b.z); }
-PD_FN pd_v3 v3_sub(pd_v3 a, pd_v3 b) { return v3(a.x - b.x, a.y - b.y, a.z - b.z); }
-PD_FN pd_v3 v3_scale(pd_v3 a, pd_real s) { return v3(a.x * s, a.y * s, a.z * s); }
-PD_FN pd_real v3_dot(pd_v3 a, pd_v3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+PD_FN pd_v3 v3_add(pd_v3 a, pd_v3 b)
+{
+    return v3(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+PD_FN pd_v3 v3_sub(pd_v3 a, pd_v3 b)
+{
+    return v3(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+PD_FN pd_v3 v3_scale(pd_v3 a, pd_real s)
+{
+    return v3(a.x * s, a.y * s, a.z * s);
+}
+PD_FN pd_real v3_dot(pd_v3 a, pd_v3 b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
 PD_FN pd_v3 v3_cross(pd_v3 a, pd_v3 b)
 {
     return v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
 }
+/* min/max without libm calls (fmin/fmax are not inlined without fast-math; no NaNs reach these) */
+PD_FN pd_real pd_min(pd_real a, pd_real b)
+{
+    return a < b ? a : b;
+}
+PD_FN pd_real pd_max(pd_real a, pd_real b)
+{
+    return a > b ? a : b;
+}
+
 /* Largest component magnitude (the max-norm), for cheap error bounds. */
 PD_FN pd_real v3_amax(pd_v3 a)
 {
     pd_real x = PD_FABS(a.x), y = PD_FABS(a.y), z = PD_FABS(a.z);
     return x > y ? (x > z ? x : z) : (y > z ? y : z);
 }
-PD_FN pd_real v3_norm(pd_v3 a) { return PD_SQRT(v3_dot(a, a)); }
+PD_FN pd_real v3_norm(pd_v3 a)
+{
+    return PD_SQRT(v3_dot(a, a));
+}
 /* Unit vector along a; a zero vector stays zero (callers never pass one on a live path). */
 PD_FN pd_v3 v3_unit(pd_v3 a)
 {

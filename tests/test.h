@@ -58,7 +58,7 @@ static int test_passed_, test_failed_, test_cur_failed_;
     do {                                                                                           \
         double e_ = (expected), a_ = (actual), t_ = (tol);                                         \
         if (!(fabs(e_ - a_) <= t_))                                                                \
-            TEST_FAILF("%s ~ %s: expected %.17g, got %.17g (diff %.3g, tol %.3g)", #expected,     \
+            TEST_FAILF("%s ~ %s: expected %.17g, got %.17g (diff %.3g, tol %.3g)", #expected,      \
                        #actual, e_, a_, fabs(e_ - a_), t_);                                        \
     } while (0)
 
@@ -67,15 +67,15 @@ static int test_passed_, test_failed_, test_cur_failed_;
     do {                                                                                           \
         double e_ = (expected), a_ = (actual), t_ = (rtol);                                        \
         if (!(fabs(e_ - a_) <= t_ * fabs(e_)))                                                     \
-            TEST_FAILF("%s ~ %s: expected %.17g, got %.17g (rel diff %.3g, rtol %.3g)",           \
-                       #expected, #actual, e_, a_, fabs(e_ - a_) / fabs(e_), t_);                  \
+            TEST_FAILF("%s ~ %s: expected %.17g, got %.17g (rel diff %.3g, rtol %.3g)", #expected, \
+                       #actual, e_, a_, fabs(e_ - a_) / fabs(e_), t_);                             \
     } while (0)
 
 #define CHECK_STR_CONTAINS(haystack, needle)                                                       \
     do {                                                                                           \
         const char *h_ = (haystack), *n_ = (needle);                                               \
         if (!h_ || !strstr(h_, n_))                                                                \
-            TEST_FAILF("expected \"%s\" to contain \"%s\"", h_ ? h_ : "(null)", n_);             \
+            TEST_FAILF("expected \"%s\" to contain \"%s\"", h_ ? h_ : "(null)", n_);               \
     } while (0)
 
 #endif

@@ -68,7 +68,8 @@ static pd_contact overlap(const pd_mesh *a, pd_pose pa, const pd_mesh *b, pd_pos
 static int finite_contact(const pd_contact *c)
 {
     double s = c->volume + c->depth;
-    for (int k = 0; k < 3; k++) s += c->centroid[k] + c->normal[k];
+    for (int k = 0; k < 3; k++)
+        s += c->centroid[k] + c->normal[k];
     return isfinite(s);
 }
 
@@ -93,10 +94,12 @@ static void rnd_quat(double q[4])
 {
     double n;
     do {
-        for (int k = 0; k < 4; k++) q[k] = 2 * rnd() - 1;
+        for (int k = 0; k < 4; k++)
+            q[k] = 2 * rnd() - 1;
         n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     } while (n < 0.1 || n > 1);
-    for (int k = 0; k < 4; k++) q[k] /= n;
+    for (int k = 0; k < 4; k++)
+        q[k] /= n;
 }
 
 /* ---- analytic cases ------------------------------------------------------------------------ */
@@ -126,7 +129,8 @@ TEST(offset_cubes_are_a_box)
         CHECK_VEC(d[0] / 2, d[1] / 2, d[2] / 2, r.centroid, 1e-12);
         CHECK_VEC(sa[0] / sn, sa[1] / sn, sa[2] / sn, r.normal, 1e-12);
         double depth = 0;
-        for (int k = 0; k < 3; k++) depth += s[k] * fabs(sa[k] / sn);
+        for (int k = 0; k < 3; k++)
+            depth += s[k] * fabs(sa[k] / sn);
         CHECK_NEAR(depth, r.depth, 1e-12);
     }
     pd_mesh_destroy(c);
@@ -198,7 +202,8 @@ TEST(touching_without_overlap_is_zero)
     /* face on face (cube resting on cube), edge on edge, vertex on vertex */
     double offs[][3] = {{0, 0, 1}, {1, 1, 0}, {1, -1, 1}, {1, 0, 0}};
     for (int i = 0; i < 4; i++) {
-        pd_contact r = overlap(c, ORIGIN, c, pose(offs[i][0], offs[i][1], offs[i][2], 1, 0, 0, 0), 0);
+        pd_contact r =
+            overlap(c, ORIGIN, c, pose(offs[i][0], offs[i][1], offs[i][2], 1, 0, 0, 0), 0);
         CHECK(finite_contact(&r));
         CHECK(!r.hit);
         CHECK_NEAR(0, r.volume, 0);
@@ -263,11 +268,11 @@ TEST(identical_coincident_shapes)
         double R[3][3], cw[3];
         pd_quat_to_matrix(p.q, R);
         for (int k = 0; k < 3; k++)
-            cw[k] = R[k][0] * mp.centroid[0] + R[k][1] * mp.centroid[1] +
-                    R[k][2] * mp.centroid[2] + p.x[k];
+            cw[k] = R[k][0] * mp.centroid[0] + R[k][1] * mp.centroid[1] + R[k][2] * mp.centroid[2] +
+                    p.x[k];
         CHECK_VEC(cw[0], cw[1], cw[2], r.centroid, 1e-12);
-        double nn = sqrt(r.normal[0] * r.normal[0] + r.normal[1] * r.normal[1] +
-                         r.normal[2] * r.normal[2]);
+        double nn =
+            sqrt(r.normal[0] * r.normal[0] + r.normal[1] * r.normal[1] + r.normal[2] * r.normal[2]);
         CHECK_NEAR(1, nn, 1e-12);
         CHECK(r.depth > 0);
         pd_mesh_destroy(m);
@@ -293,7 +298,8 @@ static void place(const double q[4], const double *x, const double *v, double *o
 {
     double R[3][3];
     pd_quat_to_matrix(q, R);
-    for (int i = 0; i < 3; i++) out[i] = R[i][0] * v[0] + R[i][1] * v[1] + R[i][2] * v[2] + x[i];
+    for (int i = 0; i < 3; i++)
+        out[i] = R[i][0] * v[0] + R[i][1] * v[1] + R[i][2] * v[2] + x[i];
 }
 
 TEST(near_degenerate_poses_from_rounding)
@@ -346,7 +352,8 @@ static pd_pose near_pose(double dist)
     double q[4], dir[3], n;
     rnd_quat(q);
     do {
-        for (int k = 0; k < 3; k++) dir[k] = 2 * rnd() - 1;
+        for (int k = 0; k < 3; k++)
+            dir[k] = 2 * rnd() - 1;
         n = sqrt(dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]);
     } while (n < 0.1 || n > 1);
     return pose(dist * dir[0] / n, dist * dir[1] / n, dist * dir[2] / n, q[0], q[1], q[2], q[3]);
@@ -418,8 +425,8 @@ TEST(invariant_under_common_rigid_motion_even_1e3_m_away)
             for (int i = 0; i < 3; i++) {
                 double c = R[i][0] * ref.centroid[0] + R[i][1] * ref.centroid[1] +
                            R[i][2] * ref.centroid[2] + far[f][i];
-                double n = R[i][0] * ref.normal[0] + R[i][1] * ref.normal[1] +
-                           R[i][2] * ref.normal[2];
+                double n =
+                    R[i][0] * ref.normal[0] + R[i][1] * ref.normal[1] + R[i][2] * ref.normal[2];
                 CHECK_NEAR(c, r.centroid[i], 1e-9);
                 CHECK_NEAR(n, r.normal[i], 1e-8);
             }
@@ -557,7 +564,8 @@ TEST(icosphere_overlap_converges_to_spherical_caps)
         pd_mass_props mp;
         pd_mesh_mass_props(m, &mp);
         double s = cbrt(4.0 / 3.0 * PI / mp.volume);
-        for (int i = 0; i < 3 * m->nverts; i++) m->verts[i] *= s;
+        for (int i = 0; i < 3 * m->nverts; i++)
+            m->verts[i] *= s;
         /* average over orientations: the faceting error depends on which feature faces */
         double err = 0;
         int n = 8;

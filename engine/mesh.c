@@ -1,0 +1,578 @@
+/*
+ * mesh.c - building meshes from arrays: welding, validation, mass properties and the body frame.
+ *
+ * Every mesh in polydem, loaded or generated, passes through mesh_finish, so the overlap code can
+ * rely on a closed, edge-manifold, consistently outward-oriented surface.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mesh_internal.h"
+
+/* Principal moments closer than this (relative) are treated as equal: the mesh's own axes are
+ * kept inside their eigenspace, so a cube stays axis-aligned instead of taking whatever rotation
+ * rounding noise would pick. */
+#define MESH_EIG_TOL 1e-9
+
+static const char *mesh_label(const char *label)
+{
+    return label && *label ? label : "mesh";
+}
+
+/* ---- welding ------------------------------------------------------------------------------- */
+
+typedef struct {
+    double x, y, z;
+    int idx;
+} weld_key;
+
+/* Orders by value (so -0.0 and +0.0 weld: they are the same point), then by index so the first
+ * occurrence of every point leads its run. */
+static int weld_cmp(const void *pa, const void *pb)
+{
+    const weld_key *a = pa, *b = pb;
+    if (a->x != b->x) return a->x < b->x ? -1 : 1;
+    if (a->y != b->y) return a->y < b->y ? -1 : 1;
+    if (a->z != b->z) return a->z < b->z ? -1 : 1;
+    return (a->idx > b->idx) - (a->idx < b->idx);
+}
+
+/*
+ * Merges exactly equal vertices (sorting, O(n log n)) and drops unreferenced ones. Survivors keep
+ * their relative order, so a mesh without duplicates comes out unchanged. On success verts holds
+ * *nverts_out compacted vertices and tris is renumbered.
+ */
+static int mesh_weld(double *verts, int nverts, int *tris, int ntris, int *nverts_out)
+{
+    weld_key *keys = malloc((size_t)nverts * sizeof *keys);
+    int *rep = malloc((size_t)nverts * sizeof *rep);
+    if (!keys || !rep) {
+        free(keys);
+        free(rep);
+        return PD_ENOMEM;
+    }
+    for (int i = 0; i < nverts; i++) {
+        keys[i] = (weld_key){verts[3 * i], verts[3 * i + 1], verts[3 * i + 2], i};
+    }
+    qsort(keys, (size_t)nverts, sizeof *keys, weld_cmp);
+    for (int i = 0; i < nverts;) {
+        int j = i;
+        while (j < nverts && keys[j].x == keys[i].x && keys[j].y == keys[i].y &&
+               keys[j].z == keys[i].z) {
+            rep[keys[j].idx] = keys[i].idx;
+            j++;
+        }
+        i = j;
+    }
+    free(keys);
+
+    /* Reuse rep's storage afterwards: newidx[i] is the compacted index of representative i, or
+     * -1 while unreferenced. Representatives are numbered in increasing original order. */
+    int *newidx = malloc((size_t)nverts * sizeof *newidx);
+    if (!newidx) {
+        free(rep);
+        return PD_ENOMEM;
+    }
+    for (int i = 0; i < nverts; i++)
+        newidx[i] = -1;
+    for (int k = 0; k < 3 * ntris; k++)
+        newidx[rep[tris[k]]] = 0;
+    int n = 0;
+    for (int i = 0; i < nverts; i++) {
+        if (newidx[i] < 0) continue;
+        newidx[i] = n;
+        /* n <= i, so moving forward never overwrites a vertex still to be read. */
+        memmove(&verts[3 * n], &verts[3 * i], 3 * sizeof *verts);
+        n++;
+    }
+    for (int k = 0; k < 3 * ntris; k++)
+        tris[k] = newidx[rep[tris[k]]];
+    free(rep);
+    free(newidx);
+    *nverts_out = n;
+    return PD_OK;
+}
+
+/* ---- validation ---------------------------------------------------------------------------- */
+
+static const double *vtx(const double *verts, int i)
+{
+    return &verts[3 * i];
+}
+
+static void sub3(const double *a, const double *b, double *r)
+{
+    r[0] = a[0] - b[0];
+    r[1] = a[1] - b[1];
+    r[2] = a[2] - b[2];
+}
+
+static void cross3(const double *a, const double *b, double *r)
+{
+    r[0] = a[1] * b[2] - a[2] * b[1];
+    r[1] = a[2] * b[0] - a[0] * b[2];
+    r[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static double dot3(const double *a, const double *b)
+{
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+/* Rejects triangles with a repeated vertex or (nearly) collinear vertices: the cross product is
+ * compared with the longest edge squared so the test does not depend on the mesh's scale. */
+static int check_degenerate(const double *verts, const int *tris, int ntris, const char *label,
+                            pd_error *err)
+{
+    for (int t = 0; t < ntris; t++) {
+        const int *f = &tris[3 * t];
+        const double *a = vtx(verts, f[0]), *b = vtx(verts, f[1]), *c = vtx(verts, f[2]);
+        const char *why = NULL;
+        if (f[0] == f[1] || f[1] == f[2] || f[0] == f[2]) {
+            why = "is degenerate (repeated vertex)";
+        } else {
+            double ab[3], bc[3], ca[3], n[3];
+            sub3(b, a, ab);
+            sub3(c, b, bc);
+            sub3(a, c, ca);
+            cross3(ab, bc, n);
+            double lmax = fmax(dot3(ab, ab), fmax(dot3(bc, bc), dot3(ca, ca)));
+            if (!(sqrt(dot3(n, n)) > 1e-12 * lmax)) why = "has zero area";
+        }
+        if (why) {
+            return pd_error_set(err, PD_EMESH,
+                                "%s: triangle %d %s: (%g,%g,%g) (%g,%g,%g) (%g,%g,%g)", label, t,
+                                why, a[0], a[1], a[2], b[0], b[1], b[2], c[0], c[1], c[2]);
+        }
+    }
+    return PD_OK;
+}
+
+typedef struct {
+    int lo, hi; /* undirected key, lo < hi */
+    int tri;
+    int from; /* the directed edge runs from -> other end */
+} edge_rec;
+
+static int edge_cmp(const void *pa, const void *pb)
+{
+    const edge_rec *a = pa, *b = pb;
+    if (a->lo != b->lo) return a->lo < b->lo ? -1 : 1;
+    if (a->hi != b->hi) return a->hi < b->hi ? -1 : 1;
+    return (a->tri > b->tri) - (a->tri < b->tri);
+}
+
+/* Every undirected edge must be used by exactly two triangles, once in each direction. Counts
+ * each defect over the whole mesh and reports the first one found in sorted edge order. */
+static int check_edges(const double *verts, const int *tris, int ntris, const char *label,
+                       pd_error *err)
+{
+    size_t ne = 3 * (size_t)ntris;
+    edge_rec *e = malloc(ne * sizeof *e);
+    if (!e) return pd_error_set(err, PD_ENOMEM, "%s: out of memory checking edges", label);
+    for (int t = 0; t < ntris; t++) {
+        for (int k = 0; k < 3; k++) {
+            int a = tris[3 * t + k], b = tris[3 * t + (k + 1) % 3];
+            e[3 * (size_t)t + k] = (edge_rec){a < b ? a : b, a < b ? b : a, t, a};
+        }
+    }
+    qsort(e, ne, sizeof *e, edge_cmp);
+
+    int nopen = 0, nmulti = 0, nflip = 0;
+    const edge_rec *open1 = NULL, *multi1 = NULL, *flip1 = NULL;
+    int multi_count = 0;
+    for (size_t i = 0; i < ne;) {
+        size_t j = i + 1;
+        while (j < ne && e[j].lo == e[i].lo && e[j].hi == e[i].hi)
+            j++;
+        size_t cnt = j - i;
+        if (cnt == 1) {
+            if (!nopen++) open1 = &e[i];
+        } else if (cnt > 2) {
+            if (!nmulti++) {
+                multi1 = &e[i];
+                multi_count = (int)cnt;
+            }
+        } else if (e[i].from == e[i + 1].from) {
+            if (!nflip++) flip1 = &e[i];
+        }
+        i = j;
+    }
+
+    int rc = PD_OK;
+    if (nopen) {
+        int to = open1->from == open1->lo ? open1->hi : open1->lo;
+        const double *a = vtx(verts, open1->from), *b = vtx(verts, to);
+        rc = pd_error_set(err, PD_EMESH, "%s: %d open edge%s, first from (%g,%g,%g) to (%g,%g,%g)",
+                          label, nopen, nopen == 1 ? "" : "s", a[0], a[1], a[2], b[0], b[1], b[2]);
+    } else if (nmulti) {
+        const double *a = vtx(verts, multi1->lo), *b = vtx(verts, multi1->hi);
+        rc = pd_error_set(err, PD_EMESH,
+                          "%s: %d non-manifold edge%s (shared by more than 2 triangles), first "
+                          "(%g,%g,%g)-(%g,%g,%g) shared by %d triangles",
+                          label, nmulti, nmulti == 1 ? "" : "s", a[0], a[1], a[2], b[0], b[1], b[2],
+                          multi_count);
+    } else if (nflip) {
+        const double *a = vtx(verts, flip1->lo), *b = vtx(verts, flip1->hi);
+        rc = pd_error_set(err, PD_EMESH,
+                          "%s: inconsistently oriented triangles at edge (%g,%g,%g)-(%g,%g,%g) "
+                          "(triangles %d and %d)",
+                          label, a[0], a[1], a[2], b[0], b[1], b[2], flip1[0].tri, flip1[1].tri);
+    }
+    free(e);
+    return rc;
+}
+
+static void bbox(const double *verts, int nverts, double lo[3], double hi[3])
+{
+    for (int k = 0; k < 3; k++) {
+        lo[k] = nverts > 0 ? verts[k] : 0;
+        hi[k] = lo[k];
+    }
+    for (int i = 1; i < nverts; i++) {
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], verts[3 * i + k]);
+            hi[k] = fmax(hi[k], verts[3 * i + k]);
+        }
+    }
+}
+
+double mesh_signed_volume(const double *verts, int nverts, const int *tris, int ntris)
+{
+    /* Tetrahedra from the bounding-box centre rather than the origin: a mesh far from the origin
+     * would otherwise sum large terms of opposite sign and lose its digits. */
+    double lo[3], hi[3], ref[3];
+    bbox(verts, nverts, lo, hi);
+    for (int k = 0; k < 3; k++)
+        ref[k] = 0.5 * (lo[k] + hi[k]);
+    double v6 = 0;
+    for (int t = 0; t < ntris; t++) {
+        double a[3], b[3], c[3], bc[3];
+        sub3(vtx(verts, tris[3 * t]), ref, a);
+        sub3(vtx(verts, tris[3 * t + 1]), ref, b);
+        sub3(vtx(verts, tris[3 * t + 2]), ref, c);
+        cross3(b, c, bc);
+        v6 += dot3(a, bc);
+    }
+    return v6 / 6;
+}
+
+int mesh_finish(double *verts, int nverts, int *tris, int ntris, const char *label, pd_mesh **out,
+                pd_error *err)
+{
+    label = mesh_label(label);
+    int rc = PD_OK;
+    *out = NULL;
+    if (ntris <= 0) {
+        rc = pd_error_set(err, PD_EMESH, "%s: no triangles", label);
+        goto fail;
+    }
+    if (ntris > MESH_MAX_TRIS) {
+        rc = pd_error_set(err, PD_EMESH, "%s: too many triangles (%d; the limit is %d)", label,
+                          ntris, MESH_MAX_TRIS);
+        goto fail;
+    }
+    for (int k = 0; k < 3 * ntris; k++) {
+        if (tris[k] < 0 || tris[k] >= nverts) {
+            rc = pd_error_set(err, PD_EMESH,
+                              "%s: triangle %d: vertex index %d out of range (%d vertices)", label,
+                              k / 3, tris[k], nverts);
+            goto fail;
+        }
+    }
+    for (int i = 0; i < nverts; i++) {
+        const double *p = vtx(verts, i);
+        if (!isfinite(p[0]) || !isfinite(p[1]) || !isfinite(p[2])) {
+            rc = pd_error_set(err, PD_EMESH, "%s: vertex %d has a non-finite coordinate (%g,%g,%g)",
+                              label, i, p[0], p[1], p[2]);
+            goto fail;
+        }
+    }
+    int nv = 0;
+    if ((rc = mesh_weld(verts, nverts, tris, ntris, &nv)) != PD_OK) {
+        rc = pd_error_set(err, rc, "%s: out of memory welding vertices", label);
+        goto fail;
+    }
+    if ((rc = check_degenerate(verts, tris, ntris, label, err)) != PD_OK) goto fail;
+    if ((rc = check_edges(verts, tris, ntris, label, err)) != PD_OK) goto fail;
+
+    double lo[3], hi[3], d[3];
+    bbox(verts, nv, lo, hi);
+    sub3(hi, lo, d);
+    double diag = sqrt(dot3(d, d));
+    double vol = mesh_signed_volume(verts, nv, tris, ntris);
+    if (!(fabs(vol) > 1e-12 * diag * diag * diag)) {
+        rc = pd_error_set(err, PD_EMESH,
+                          "%s: enclosed volume is zero (%g for a bounding box "
+                          "diagonal of %g)",
+                          label, vol, diag);
+        goto fail;
+    }
+    if (vol < 0) {
+        /* Consistently inward: the usual export mistake, fixed rather than rejected. */
+        for (int t = 0; t < ntris; t++) {
+            int s = tris[3 * t + 1];
+            tris[3 * t + 1] = tris[3 * t + 2];
+            tris[3 * t + 2] = s;
+        }
+    }
+
+    pd_mesh *m = malloc(sizeof *m);
+    if (!m) {
+        rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory", label);
+        goto fail;
+    }
+    if (nv < nverts) {
+        double *shrunk = realloc(verts, 3 * (size_t)nv * sizeof *verts);
+        if (shrunk) verts = shrunk;
+    }
+    *m = (pd_mesh){nv, ntris, verts, tris};
+    *out = m;
+    return PD_OK;
+
+fail:
+    free(verts);
+    free(tris);
+    return rc;
+}
+
+int pd_mesh_from_arrays(const double *verts, int nverts, const int *tris, int ntris,
+                        const char *label, pd_mesh **out, pd_error *err)
+{
+    label = mesh_label(label);
+    if (!out) return pd_error_set(err, PD_EINVAL, "%s: no output pointer", label);
+    *out = NULL;
+    if (nverts < 0 || ntris < 0) {
+        return pd_error_set(err, PD_EINVAL, "%s: negative count (%d vertices, %d triangles)", label,
+                            nverts, ntris);
+    }
+    if (ntris == 0) return pd_error_set(err, PD_EMESH, "%s: no triangles", label);
+    if (ntris > MESH_MAX_TRIS || nverts > 3 * MESH_MAX_TRIS) {
+        return pd_error_set(
+            err, PD_EMESH, "%s: too many triangles or vertices (%d, %d; the limit is %d triangles)",
+            label, ntris, nverts, MESH_MAX_TRIS);
+    }
+    if ((nverts && !verts) || !tris) return pd_error_set(err, PD_EINVAL, "%s: null array", label);
+    double *v = malloc((size_t)(nverts ? nverts : 1) * 3 * sizeof *v);
+    int *t = malloc(3 * (size_t)ntris * sizeof *t);
+    if (!v || !t) {
+        free(v);
+        free(t);
+        return pd_error_set(err, PD_ENOMEM, "%s: out of memory", label);
+    }
+    if (nverts) memcpy(v, verts, 3 * (size_t)nverts * sizeof *v);
+    memcpy(t, tris, 3 * (size_t)ntris * sizeof *t);
+    return mesh_finish(v, nverts, t, ntris, label, out, err);
+}
+
+void pd_mesh_destroy(pd_mesh *m)
+{
+    if (!m) return;
+    free(m->verts);
+    free(m->tris);
+    free(m);
+}
+
+/* ---- mass properties ----------------------------------------------------------------------- */
+
+/* Cyclic Jacobi iteration on a symmetric 3x3: w gets the eigenvalues, column k of v the unit
+ * eigenvector of w[k]. Converges quadratically; 50 sweeps is far more than ever needed. */
+static void jacobi3(const double in[3][3], double w[3], double v[3][3])
+{
+    double a[3][3];
+    memcpy(a, in, sizeof a);
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            v[i][j] = i == j;
+    for (int sweep = 0; sweep < 50; sweep++) {
+        if (a[0][1] == 0 && a[0][2] == 0 && a[1][2] == 0) break;
+        for (int p = 0; p < 2; p++) {
+            for (int q = p + 1; q < 3; q++) {
+                double apq = a[p][q];
+                if (apq == 0) continue;
+                if (fabs(apq) < 1e-18 * (fabs(a[p][p]) + fabs(a[q][q]))) {
+                    a[p][q] = a[q][p] = 0; /* below rounding of the diagonal */
+                    continue;
+                }
+                double theta = (a[q][q] - a[p][p]) / (2 * apq);
+                double t = 1 / (fabs(theta) + sqrt(theta * theta + 1));
+                if (theta < 0) t = -t;
+                double c = 1 / sqrt(t * t + 1), s = t * c;
+                a[p][p] -= t * apq;
+                a[q][q] += t * apq;
+                a[p][q] = a[q][p] = 0;
+                int r = 3 - p - q;
+                double arp = a[r][p], arq = a[r][q];
+                a[r][p] = a[p][r] = c * arp - s * arq;
+                a[r][q] = a[q][r] = s * arp + c * arq;
+                for (int k = 0; k < 3; k++) {
+                    double vkp = v[k][p], vkq = v[k][q];
+                    v[k][p] = c * vkp - s * vkq;
+                    v[k][q] = s * vkp + c * vkq;
+                }
+            }
+        }
+    }
+    for (int k = 0; k < 3; k++)
+        w[k] = a[k][k];
+}
+
+static int moments_equal(double a, double b)
+{
+    return fabs(a - b) < MESH_EIG_TOL * fmax(fabs(a), fabs(b));
+}
+
+static void normalize3(double *a)
+{
+    double n = sqrt(dot3(a, a));
+    if (n > 0)
+        for (int k = 0; k < 3; k++)
+            a[k] /= n;
+}
+
+/* Flips a so that its largest component is positive: a reproducible sign for eigenvectors. */
+static void canonical_sign(double *a)
+{
+    int big = 0;
+    for (int k = 1; k < 3; k++)
+        if (fabs(a[k]) > fabs(a[big])) big = k;
+    if (a[big] < 0)
+        for (int k = 0; k < 3; k++)
+            a[k] = -a[k];
+}
+
+/* Principal moments (ascending) and right-handed axes of the inertia tensor I, keeping the
+ * coordinate axes inside any eigenspace of coinciding moments. */
+static void principal_axes(const double inertia[3][3], double pr[3], double axes[3][3])
+{
+    double w[3], v[3][3];
+    jacobi3(inertia, w, v);
+    int ord[3] = {0, 1, 2};
+    for (int i = 0; i < 3; i++)
+        for (int j = i + 1; j < 3; j++)
+            if (w[ord[j]] < w[ord[i]]) {
+                int s = ord[i];
+                ord[i] = ord[j];
+                ord[j] = s;
+            }
+    for (int i = 0; i < 3; i++) {
+        pr[i] = w[ord[i]];
+        for (int k = 0; k < 3; k++)
+            axes[i][k] = v[k][ord[i]];
+    }
+
+    int eq01 = moments_equal(pr[0], pr[1]), eq12 = moments_equal(pr[1], pr[2]);
+    if (eq01 && eq12) {
+        for (int i = 0; i < 3; i++)
+            for (int j = 0; j < 3; j++)
+                axes[i][j] = i == j;
+        return;
+    }
+    if (eq01 || eq12) {
+        /* One distinct axis e from the solve; the degenerate plane gets the coordinate axis most
+         * perpendicular to e, projected into the plane, and then e x u to close the triad. */
+        int k = eq01 ? 2 : 0;
+        double e[3], u[3];
+        memcpy(e, axes[k], sizeof e);
+        int best = 0;
+        for (int j = 1; j < 3; j++)
+            if (fabs(e[j]) < fabs(e[best])) best = j;
+        int big = 0;
+        for (int j = 1; j < 3; j++)
+            if (fabs(e[j]) > fabs(e[big])) big = j;
+        if (e[big] < 0)
+            for (int j = 0; j < 3; j++)
+                e[j] = -e[j];
+        for (int j = 0; j < 3; j++)
+            u[j] = (j == best) - e[best] * e[j];
+        normalize3(u);
+        memcpy(axes[k], e, sizeof e);
+        memcpy(axes[(k + 1) % 3], u, sizeof u);
+        cross3(e, u, axes[(k + 2) % 3]);
+        normalize3(axes[(k + 2) % 3]);
+        return;
+    }
+    canonical_sign(axes[0]);
+    canonical_sign(axes[1]);
+    cross3(axes[0], axes[1], axes[2]);
+    normalize3(axes[2]);
+}
+
+void pd_mesh_mass_props(const pd_mesh *m, pd_mass_props *mp)
+{
+    memset(mp, 0, sizeof *mp);
+    for (int i = 0; i < 3; i++)
+        mp->axes[i][i] = 1;
+    if (!m || m->ntris <= 0 || m->nverts <= 0) return;
+
+    /* Signed tetrahedra from the bounding-box centre (precision far from the origin). For the
+     * tetrahedron (0, a, b, c) with det = a.(b x c): volume det/6, first moment det/24 (a+b+c),
+     * second moment det/120 (a_i a_j + b_i b_j + c_i c_j + s_i s_j) with s = a+b+c. */
+    double lo[3], hi[3], ref[3];
+    bbox(m->verts, m->nverts, lo, hi);
+    for (int k = 0; k < 3; k++)
+        ref[k] = 0.5 * (lo[k] + hi[k]);
+    double v6 = 0, s1[3] = {0, 0, 0}, s2[3][3] = {{0}};
+    for (int t = 0; t < m->ntris; t++) {
+        double a[3], b[3], c[3], bc[3], s[3];
+        sub3(vtx(m->verts, m->tris[3 * t]), ref, a);
+        sub3(vtx(m->verts, m->tris[3 * t + 1]), ref, b);
+        sub3(vtx(m->verts, m->tris[3 * t + 2]), ref, c);
+        cross3(b, c, bc);
+        double det = dot3(a, bc);
+        for (int i = 0; i < 3; i++)
+            s[i] = a[i] + b[i] + c[i];
+        v6 += det;
+        for (int i = 0; i < 3; i++) {
+            s1[i] += det * s[i];
+            for (int j = i; j < 3; j++)
+                s2[i][j] += det * (a[i] * a[j] + b[i] * b[j] + c[i] * c[j] + s[i] * s[j]);
+        }
+    }
+    double vol = v6 / 6;
+    mp->volume = vol;
+    double d[3] = {0, 0, 0};
+    if (vol != 0)
+        for (int i = 0; i < 3; i++)
+            d[i] = s1[i] / 24 / vol;
+    for (int i = 0; i < 3; i++)
+        mp->centroid[i] = ref[i] + d[i];
+
+    /* Second moment about the centroid (parallel-axis shift), then I = tr(C) 1 - C. */
+    double cm[3][3];
+    for (int i = 0; i < 3; i++)
+        for (int j = i; j < 3; j++)
+            cm[i][j] = cm[j][i] = s2[i][j] / 120 - vol * d[i] * d[j];
+    double tr = cm[0][0] + cm[1][1] + cm[2][2];
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            mp->inertia[i][j] = (i == j ? tr : 0) - cm[i][j];
+    principal_axes(mp->inertia, mp->principal, mp->axes);
+}
+
+void pd_mesh_to_body_frame(pd_mesh *m, pd_mass_props *mp, double rot[3][3])
+{
+    pd_mass_props p;
+    pd_mesh_mass_props(m, &p);
+    if (m) {
+        for (int i = 0; i < m->nverts; i++) {
+            double *v = &m->verts[3 * i], d[3];
+            sub3(v, p.centroid, d);
+            for (int k = 0; k < 3; k++)
+                v[k] = dot3(p.axes[k], d);
+        }
+    }
+    if (rot) memcpy(rot, p.axes, sizeof p.axes);
+    if (mp) {
+        *mp = p;
+        memset(mp->centroid, 0, sizeof mp->centroid);
+        for (int i = 0; i < 3; i++) {
+            for (int j = 0; j < 3; j++) {
+                mp->inertia[i][j] = i == j ? p.principal[i] : 0;
+                mp->axes[i][j] = i == j;
+            }
+        }
+    }
+}

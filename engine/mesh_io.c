@@ -1,0 +1,587 @@
+/*
+ * mesh_io.c - reading binary/ASCII STL and Wavefront OBJ, writing binary STL, and the
+ * "builtin:NAME[:TRIANGLES[:SEED]]" specs of pd_mesh_open.
+ *
+ * Files are read whole (they are small: particles have hundreds to thousands of triangles) and
+ * the format is chosen by content first, extension second. Every parser hands its triangle soup
+ * to mesh_finish, which welds and validates.
+ */
+#include <ctype.h>
+#include <errno.h>
+#include <float.h>
+#include <limits.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+#include "mesh_internal.h"
+
+/* Largest file read: a binary STL at the triangle limit is 500 MB, an ASCII one a few times
+ * more; anything bigger is not a particle. */
+#define MESH_MAX_FILE ((size_t)1 << 31)
+
+/* ---- reading files ------------------------------------------------------------------------- */
+
+/* Reads the whole file (works for pipes too) into a NUL-terminated buffer. */
+static int read_whole(const char *path, char **buf_out, size_t *len_out, pd_error *err)
+{
+    *buf_out = NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) return pd_error_set(err, PD_EIO, "%s: cannot open: %s", path, strerror(errno));
+    size_t cap = 1 << 16, len = 0;
+    char *buf = malloc(cap + 1);
+    int rc = PD_OK;
+    if (!buf) {
+        rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory", path);
+        goto done;
+    }
+    for (;;) {
+        if (len == cap) {
+            if (cap >= MESH_MAX_FILE) {
+                rc = pd_error_set(err, PD_EIO, "%s: file too large (the limit is %zu bytes)", path,
+                                  MESH_MAX_FILE);
+                goto done;
+            }
+            size_t ncap = cap * 2 > MESH_MAX_FILE ? MESH_MAX_FILE : cap * 2;
+            char *nb = realloc(buf, ncap + 1);
+            if (!nb) {
+                rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory reading the file", path);
+                goto done;
+            }
+            buf = nb;
+            cap = ncap;
+        }
+        size_t n = fread(buf + len, 1, cap - len, f);
+        len += n;
+        if (n == 0) {
+            if (ferror(f)) {
+                rc = pd_error_set(err, PD_EIO, "%s: cannot read: %s", path, strerror(errno));
+                goto done;
+            }
+            break;
+        }
+    }
+    buf[len] = '\0';
+done:
+    fclose(f);
+    if (rc != PD_OK) {
+        free(buf);
+        return rc;
+    }
+    *buf_out = buf;
+    *len_out = len;
+    return PD_OK;
+}
+
+/* Grows *p (elements of size elem) so that it holds at least need elements. */
+static int grow(void **p, size_t *cap, size_t need, size_t elem)
+{
+    if (need <= *cap) return 0;
+    size_t ncap = *cap ? *cap : 256;
+    while (ncap < need)
+        ncap *= 2;
+    void *np = realloc(*p, ncap * elem);
+    if (!np) return -1;
+    *p = np;
+    *cap = ncap;
+    return 0;
+}
+
+/* ---- binary STL ---------------------------------------------------------------------------- */
+
+static uint32_t get_le32(const unsigned char *p)
+{
+    return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+static void put_le32(unsigned char *p, uint32_t u)
+{
+    for (int k = 0; k < 4; k++)
+        p[k] = (unsigned char)(u >> (8 * k));
+}
+
+static double get_float(const unsigned char *p)
+{
+    uint32_t u = get_le32(p);
+    float f;
+    memcpy(&f, &u, sizeof f);
+    return (double)f; /* exact: STL coordinates are float32 and stay those values */
+}
+
+static int parse_stl_binary(const char *label, const unsigned char *buf, size_t len, pd_mesh **out,
+                            pd_error *err)
+{
+    if (len < 84) {
+        return pd_error_set(err, PD_EMESH,
+                            "%s: not a binary STL: %zu bytes, shorter than the 84-byte header",
+                            label, len);
+    }
+    uint32_t n = get_le32(buf + 80);
+    if (n == 0) return pd_error_set(err, PD_EMESH, "%s: no triangles", label);
+    if (n > MESH_MAX_TRIS) {
+        return pd_error_set(err, PD_EMESH, "%s: too many triangles (%lu; the limit is %d)", label,
+                            (unsigned long)n, MESH_MAX_TRIS);
+    }
+    size_t need = 84 + 50 * (size_t)n;
+    if (len < need) {
+        return pd_error_set(err, PD_EMESH,
+                            "%s: truncated binary STL: %lu triangles need %zu bytes, file has %zu",
+                            label, (unsigned long)n, need, len);
+    }
+    double *verts = malloc(9 * (size_t)n * sizeof *verts);
+    int *tris = malloc(3 * (size_t)n * sizeof *tris);
+    if (!verts || !tris) {
+        free(verts);
+        free(tris);
+        return pd_error_set(err, PD_ENOMEM, "%s: out of memory", label);
+    }
+    for (size_t t = 0; t < n; t++) {
+        const unsigned char *rec = buf + 84 + 50 * t + 12; /* skip the stored normal */
+        for (int k = 0; k < 9; k++)
+            verts[9 * t + k] = get_float(rec + 4 * k);
+        for (int k = 0; k < 3; k++)
+            tris[3 * t + k] = (int)(3 * t + k);
+    }
+    return mesh_finish(verts, (int)(3 * n), tris, (int)n, label, out, err);
+}
+
+/* ---- text parsing helpers ------------------------------------------------------------------ */
+
+typedef struct {
+    const char *p, *end; /* rest of the current line */
+} line_toks;
+
+/* Next whitespace-separated token of the line; returns 0 at the end of the line. */
+static int next_tok(line_toks *lt, const char **tok, size_t *len)
+{
+    while (lt->p < lt->end && isspace((unsigned char)*lt->p))
+        lt->p++;
+    if (lt->p >= lt->end) return 0;
+    const char *s = lt->p;
+    while (lt->p < lt->end && !isspace((unsigned char)*lt->p))
+        lt->p++;
+    *tok = s;
+    *len = (size_t)(lt->p - s);
+    return 1;
+}
+
+static int tok_is(const char *tok, size_t len, const char *word)
+{
+    return strlen(word) == len && strncasecmp(tok, word, len) == 0;
+}
+
+/* Parses a whole token as a number. The token is followed by whitespace or the buffer's NUL, so
+ * strtod cannot run past it. */
+static int tok_double(const char *tok, size_t len, double *out)
+{
+    char *end;
+    *out = strtod(tok, &end);
+    return end == tok + len;
+}
+
+/* Copies a token for an error message, at most 40 bytes, with unprintable bytes as '?'. */
+static const char *tok_show(const char *tok, size_t len, char buf[41])
+{
+    size_t n = len > 40 ? 40 : len;
+    for (size_t i = 0; i < n; i++)
+        buf[i] = isprint((unsigned char)tok[i]) ? tok[i] : '?';
+    buf[n] = '\0';
+    return buf;
+}
+
+/* Splits [*pos, end) at the next newline: the line runs [*pos, *line_end). */
+static const char *next_line(const char **pos, const char *end, const char **line_end)
+{
+    const char *s = *pos;
+    const char *nl = memchr(s, '\n', (size_t)(end - s));
+    *line_end = nl ? nl : end;
+    *pos = nl ? nl + 1 : end;
+    return s;
+}
+
+/* True when the first bytes hold no control characters other than whitespace. */
+static int looks_like_text(const char *buf, size_t len)
+{
+    size_t n = len < 4096 ? len : 4096;
+    for (size_t i = 0; i < n; i++) {
+        unsigned char c = (unsigned char)buf[i];
+        if (c < 0x20 && c != '\t' && c != '\n' && c != '\r' && c != '\f' && c != '\v') return 0;
+    }
+    return 1;
+}
+
+/* ---- ASCII STL ----------------------------------------------------------------------------- */
+
+static int parse_stl_ascii(const char *label, const char *buf, size_t len, pd_mesh **out,
+                           pd_error *err)
+{
+    double *verts = NULL;
+    int *tris = NULL;
+    size_t vcap = 0, tcap = 0, nv = 0, nt = 0;
+    enum { OUTSIDE, IN_SOLID, IN_FACET, IN_LOOP } state = OUTSIDE;
+    int loop_verts = 0, had_loop = 0, lineno = 0, rc = PD_OK;
+    const char *pos = buf, *end = buf + len;
+    while (pos < end) {
+        const char *le, *ls = next_line(&pos, end, &le), *tok;
+        size_t tl;
+        line_toks lt = {ls, le};
+        lineno++;
+        if (!next_tok(&lt, &tok, &tl)) continue;
+        if (state == OUTSIDE && tok_is(tok, tl, "solid")) {
+            state = IN_SOLID; /* the rest of the line is the solid's name */
+        } else if (state == IN_SOLID && tok_is(tok, tl, "facet")) {
+            state = IN_FACET; /* the stored normal is ignored: orientation comes from order */
+            had_loop = 0;
+        } else if (state == IN_SOLID && tok_is(tok, tl, "endsolid")) {
+            state = OUTSIDE;
+        } else if (state == IN_FACET && !had_loop && tok_is(tok, tl, "outer") &&
+                   next_tok(&lt, &tok, &tl) && tok_is(tok, tl, "loop")) {
+            state = IN_LOOP;
+            loop_verts = 0;
+        } else if (state == IN_FACET && had_loop && tok_is(tok, tl, "endfacet")) {
+            state = IN_SOLID;
+        } else if (state == IN_LOOP && tok_is(tok, tl, "vertex")) {
+            double x[3];
+            for (int k = 0; k < 3; k++) {
+                if (!next_tok(&lt, &tok, &tl) || !tok_double(tok, tl, &x[k])) {
+                    rc =
+                        pd_error_set(err, PD_EMESH, "%s:%d: vertex needs 3 numbers", label, lineno);
+                    goto fail;
+                }
+            }
+            if (++loop_verts > 3) {
+                rc = pd_error_set(err, PD_EMESH, "%s:%d: facet with more than 3 vertices", label,
+                                  lineno);
+                goto fail;
+            }
+            if (nv >= 3 * (size_t)MESH_MAX_TRIS) {
+                rc = pd_error_set(err, PD_EMESH, "%s:%d: too many triangles (the limit is %d)",
+                                  label, lineno, MESH_MAX_TRIS);
+                goto fail;
+            }
+            if (grow((void **)&verts, &vcap, 3 * (nv + 1), sizeof *verts)) goto oom;
+            memcpy(&verts[3 * nv], x, sizeof x);
+            nv++;
+        } else if (state == IN_LOOP && tok_is(tok, tl, "endloop")) {
+            if (loop_verts != 3) {
+                rc = pd_error_set(err, PD_EMESH, "%s:%d: facet with %d vertices (expected 3)",
+                                  label, lineno, loop_verts);
+                goto fail;
+            }
+            if (grow((void **)&tris, &tcap, 3 * (nt + 1), sizeof *tris)) goto oom;
+            for (int k = 0; k < 3; k++)
+                tris[3 * nt + k] = (int)(nv - 3 + (size_t)k);
+            nt++;
+            state = IN_FACET;
+            had_loop = 1;
+        } else {
+            char show[41];
+            rc = pd_error_set(err, PD_EMESH, "%s:%d: unexpected '%s' in ASCII STL", label, lineno,
+                              tok_show(tok, tl, show));
+            goto fail;
+        }
+    }
+    if (state == IN_FACET || state == IN_LOOP) {
+        rc = pd_error_set(err, PD_EMESH, "%s:%d: file ends inside a facet", label, lineno);
+        goto fail;
+    }
+    return mesh_finish(verts, (int)nv, tris, (int)nt, label, out, err);
+oom:
+    rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory", label);
+fail:
+    free(verts);
+    free(tris);
+    return rc;
+}
+
+/* ---- Wavefront OBJ ------------------------------------------------------------------------- */
+
+/* Statements that carry no surface geometry (normals, texture, grouping, materials, lines). */
+static int obj_keyword(const char *tok, size_t len)
+{
+    static const char *const kw[] = {"v", "vt", "vn",     "vp",     "f", "g",
+                                     "o", "s",  "usemtl", "mtllib", "l", "p"};
+    for (size_t i = 0; i < sizeof kw / sizeof kw[0]; i++)
+        if (tok_is(tok, len, kw[i])) return 1;
+    return 0;
+}
+
+/* Resolves one face corner "i", "i/t", "i//n" or "i/t/n"; negative i counts back from the last
+ * vertex read so far. Returns 0 and sets *idx, or fills err. */
+static int obj_corner(const char *label, int lineno, const char *tok, size_t tl, size_t nv,
+                      int *idx, pd_error *err)
+{
+    char *end;
+    errno = 0;
+    long i = strtol(tok, &end, 10);
+    if (end == tok || (end < tok + tl && *end != '/') || errno == ERANGE) {
+        char show[41];
+        return pd_error_set(err, PD_EMESH, "%s:%d: bad face vertex '%s'", label, lineno,
+                            tok_show(tok, tl, show));
+    }
+    long long r = i > 0 ? (long long)i - 1 : (long long)nv + i;
+    if (i == 0 || r < 0 || r >= (long long)nv) {
+        return pd_error_set(err, PD_EMESH, "%s:%d: face index %ld out of range (%zu vert%s)", label,
+                            lineno, i, nv, nv == 1 ? "ex" : "ices");
+    }
+    *idx = (int)r;
+    return PD_OK;
+}
+
+static int parse_obj(const char *label, const char *buf, size_t len, pd_mesh **out, pd_error *err)
+{
+    double *verts = NULL;
+    int *tris = NULL, *poly = NULL;
+    size_t vcap = 0, tcap = 0, pcap = 0, nv = 0, nt = 0;
+    int lineno = 0, rc = PD_OK;
+    const char *pos = buf, *end = buf + len;
+    while (pos < end) {
+        const char *le, *ls = next_line(&pos, end, &le), *tok;
+        size_t tl;
+        const char *hash = memchr(ls, '#', (size_t)(le - ls));
+        line_toks lt = {ls, hash ? hash : le};
+        lineno++;
+        if (!next_tok(&lt, &tok, &tl)) continue;
+        if (tok_is(tok, tl, "v")) {
+            double x[3];
+            for (int k = 0; k < 3; k++) {
+                if (!next_tok(&lt, &tok, &tl) || !tok_double(tok, tl, &x[k])) {
+                    rc =
+                        pd_error_set(err, PD_EMESH, "%s:%d: vertex needs 3 numbers", label, lineno);
+                    goto fail;
+                }
+            }
+            if (nv >= 3 * (size_t)MESH_MAX_TRIS) {
+                rc = pd_error_set(err, PD_EMESH, "%s:%d: too many vertices (the limit is %d)",
+                                  label, lineno, 3 * MESH_MAX_TRIS);
+                goto fail;
+            }
+            if (grow((void **)&verts, &vcap, 3 * (nv + 1), sizeof *verts)) goto oom;
+            memcpy(&verts[3 * nv], x, sizeof x);
+            nv++;
+        } else if (tok_is(tok, tl, "f")) {
+            size_t np = 0;
+            while (next_tok(&lt, &tok, &tl)) {
+                if (grow((void **)&poly, &pcap, np + 1, sizeof *poly)) goto oom;
+                if ((rc = obj_corner(label, lineno, tok, tl, nv, &poly[np], err)) != PD_OK)
+                    goto fail;
+                np++;
+            }
+            if (np < 3) {
+                rc = pd_error_set(err, PD_EMESH, "%s:%d: face with %zu vertices (needs 3)", label,
+                                  lineno, np);
+                goto fail;
+            }
+            if (nt + (np - 2) > (size_t)MESH_MAX_TRIS) {
+                rc = pd_error_set(err, PD_EMESH, "%s:%d: too many triangles (the limit is %d)",
+                                  label, lineno, MESH_MAX_TRIS);
+                goto fail;
+            }
+            /* Fan from the first corner: exact for the convex polygons OBJ exporters write. */
+            if (grow((void **)&tris, &tcap, 3 * (nt + np - 2), sizeof *tris)) goto oom;
+            for (size_t k = 1; k + 1 < np; k++, nt++) {
+                tris[3 * nt] = poly[0];
+                tris[3 * nt + 1] = poly[k];
+                tris[3 * nt + 2] = poly[k + 1];
+            }
+        } else if (!isalpha((unsigned char)tok[0])) {
+            char show[41];
+            rc = pd_error_set(err, PD_EMESH, "%s:%d: not an OBJ statement: '%s'", label, lineno,
+                              tok_show(tok, tl, show));
+            goto fail;
+        }
+        /* other statements (vn, vt, g, o, s, usemtl, mtllib, l, ...) carry no solid geometry */
+    }
+    free(poly);
+    return mesh_finish(verts, (int)nv, tris, (int)nt, label, out, err);
+oom:
+    rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory", label);
+fail:
+    free(verts);
+    free(tris);
+    free(poly);
+    return rc;
+}
+
+/* ---- format detection ---------------------------------------------------------------------- */
+
+enum { FMT_UNKNOWN, FMT_STL_BINARY, FMT_STL_ASCII, FMT_OBJ };
+
+static int has_ext(const char *path, const char *ext)
+{
+    const char *dot = strrchr(path, '.');
+    return dot && strcasecmp(dot, ext) == 0;
+}
+
+static int detect_format(const char *path, const char *buf, size_t len)
+{
+    /* A binary STL's size is exactly determined by its triangle count; some binary files start
+     * with "solid" in their header, so the size decides first. */
+    if (len >= 84 && 84 + 50 * (size_t)get_le32((const unsigned char *)buf + 80) == len)
+        return FMT_STL_BINARY;
+    if (looks_like_text(buf, len)) {
+        const char *pos = buf, *end = buf + len;
+        while (pos < end) {
+            const char *le, *ls = next_line(&pos, end, &le), *tok;
+            size_t tl;
+            line_toks lt = {ls, le};
+            if (!next_tok(&lt, &tok, &tl) || tok[0] == '#') continue;
+            if (tok_is(tok, tl, "solid")) return FMT_STL_ASCII;
+            if (obj_keyword(tok, tl)) return FMT_OBJ;
+            break;
+        }
+    }
+    if (has_ext(path, ".obj")) return FMT_OBJ;
+    if (has_ext(path, ".stl")) return FMT_STL_BINARY; /* reports why it is not one */
+    return FMT_UNKNOWN;
+}
+
+int pd_mesh_load(const char *path, pd_mesh **out, pd_error *err)
+{
+    if (!out) return pd_error_set(err, PD_EINVAL, "pd_mesh_load: no output pointer");
+    *out = NULL;
+    if (!path || !*path) return pd_error_set(err, PD_EINVAL, "empty mesh path");
+    char *buf = NULL;
+    size_t len = 0;
+    int rc = read_whole(path, &buf, &len, err);
+    if (rc != PD_OK) return rc;
+    if (len == 0) {
+        free(buf);
+        return pd_error_set(err, PD_EMESH, "%s: empty file, no triangles", path);
+    }
+    switch (detect_format(path, buf, len)) {
+    case FMT_STL_BINARY:
+        rc = parse_stl_binary(path, (const unsigned char *)buf, len, out, err);
+        break;
+    case FMT_STL_ASCII:
+        rc = parse_stl_ascii(path, buf, len, out, err);
+        break;
+    case FMT_OBJ:
+        rc = parse_obj(path, buf, len, out, err);
+        break;
+    default:
+        rc = pd_error_set(err, PD_EMESH,
+                          "%s: unrecognised mesh format (expected binary or ASCII STL, or "
+                          "Wavefront OBJ)",
+                          path);
+    }
+    free(buf);
+    return rc;
+}
+
+/* ---- specs --------------------------------------------------------------------------------- */
+
+int pd_mesh_open(const char *spec, pd_mesh **out, pd_error *err)
+{
+    static const char prefix[] = "builtin:";
+    if (!out) return pd_error_set(err, PD_EINVAL, "pd_mesh_open: no output pointer");
+    *out = NULL;
+    if (!spec) return pd_error_set(err, PD_EINVAL, "empty mesh spec");
+    if (strncmp(spec, prefix, sizeof prefix - 1) != 0) return pd_mesh_load(spec, out, err);
+
+    /* builtin:NAME[:TRIANGLES[:SEED]], an empty field meaning the default */
+    char name[64], field[2][32];
+    const char *s = spec + sizeof prefix - 1, *colon = strchr(s, ':');
+    size_t n = colon ? (size_t)(colon - s) : strlen(s);
+    if (n >= sizeof name) return pd_error_set(err, PD_EINVAL, "%s: builtin name too long", spec);
+    memcpy(name, s, n);
+    name[n] = '\0';
+    int nfields = 0;
+    while (colon) {
+        s = colon + 1;
+        colon = strchr(s, ':');
+        n = colon ? (size_t)(colon - s) : strlen(s);
+        if (nfields == 2) {
+            return pd_error_set(err, PD_EINVAL,
+                                "%s: too many fields (expected builtin:NAME[:TRIANGLES[:SEED]])",
+                                spec);
+        }
+        if (n >= sizeof field[0])
+            return pd_error_set(err, PD_EINVAL, "%s: field '%s' too long", spec, s);
+        memcpy(field[nfields], s, n);
+        field[nfields++][n] = '\0';
+    }
+    long tris = 0;
+    unsigned long seed = 1;
+    char *end;
+    if (nfields >= 1 && field[0][0]) {
+        errno = 0;
+        tris = strtol(field[0], &end, 10);
+        if (*end || errno == ERANGE || tris > INT_MAX || tris < INT_MIN)
+            return pd_error_set(err, PD_EINVAL, "%s: bad triangle count '%s'", spec, field[0]);
+    }
+    if (nfields >= 2 && field[1][0]) {
+        errno = 0;
+        seed = strtoul(field[1], &end, 10);
+        if (*end || errno == ERANGE || seed > UINT_MAX || field[1][0] == '-')
+            return pd_error_set(err, PD_EINVAL, "%s: bad seed '%s'", spec, field[1]);
+    }
+    return pd_mesh_builtin(name, (int)tris, (unsigned)seed, out, err);
+}
+
+/* ---- writing ------------------------------------------------------------------------------- */
+
+static void put_float(unsigned char *p, double x)
+{
+    float f = (float)x;
+    uint32_t u;
+    memcpy(&u, &f, sizeof u);
+    put_le32(p, u);
+}
+
+int pd_mesh_write_stl(const pd_mesh *m, const char *path, pd_error *err)
+{
+    if (!m || !path) return pd_error_set(err, PD_EINVAL, "pd_mesh_write_stl: null argument");
+    for (int i = 0; i < 3 * m->nverts; i++) {
+        if (!(fabs(m->verts[i]) <= FLT_MAX)) {
+            return pd_error_set(err, PD_EINVAL,
+                                "%s: coordinate %g does not fit binary STL's float32", path,
+                                m->verts[i]);
+        }
+    }
+    FILE *f = fopen(path, "wb");
+    if (!f)
+        return pd_error_set(err, PD_EIO, "%s: cannot open for writing: %s", path, strerror(errno));
+
+    /* The header must not start with "solid", or readers would take the file for ASCII. */
+    unsigned char head[84];
+    memset(head, ' ', 80);
+    memcpy(head, "polydem binary STL", 18);
+    put_le32(head + 80, (uint32_t)m->ntris);
+    int ok = fwrite(head, 1, sizeof head, f) == sizeof head;
+    unsigned char rec[50];
+    for (int t = 0; ok && t < m->ntris; t++) {
+        const double *a = &m->verts[3 * m->tris[3 * t]], *b = &m->verts[3 * m->tris[3 * t + 1]],
+                     *c = &m->verts[3 * m->tris[3 * t + 2]];
+        double u[3], v[3], nrm[3];
+        for (int k = 0; k < 3; k++) {
+            u[k] = b[k] - a[k];
+            v[k] = c[k] - a[k];
+        }
+        nrm[0] = u[1] * v[2] - u[2] * v[1];
+        nrm[1] = u[2] * v[0] - u[0] * v[2];
+        nrm[2] = u[0] * v[1] - u[1] * v[0];
+        double len = sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+        for (int k = 0; k < 3; k++) {
+            put_float(rec + 4 * k, len > 0 ? nrm[k] / len : 0);
+            put_float(rec + 12 + 4 * k, a[k]);
+            put_float(rec + 24 + 4 * k, b[k]);
+            put_float(rec + 36 + 4 * k, c[k]);
+        }
+        rec[48] = rec[49] = 0;
+        ok = fwrite(rec, 1, sizeof rec, f) == sizeof rec;
+    }
+    int saved = errno;
+    if (fclose(f) != 0 && ok) {
+        ok = 0;
+        saved = errno;
+    }
+    if (!ok) {
+        remove(path); /* do not leave a half-written file that looks like a mesh */
+        return pd_error_set(err, PD_EIO, "%s: cannot write: %s", path, strerror(saved));
+    }
+    return PD_OK;
+}

@@ -1,0 +1,201 @@
+#!/bin/sh
+# test_cli.sh - the polydem CLI contract, driven as other tools drive it: JSON on stdout, exit 2
+# with a message on stderr for bad arguments or meshes. Prints "N passed, N failed".
+POLYDEM=${POLYDEM:-build/polydem}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+ok() { passed=$((passed + 1)); echo "ok   $1"; }
+bad() { failed=$((failed + 1)); echo "FAIL $1: $2"; }
+
+# json_num FILE KEY [INDEX]: a number (or an array element, 0-based) from the one-line JSON output
+# (the "units" object, which repeats key names, is dropped first)
+json_num() {
+    sed 's/, "units": {[^}]*}//' "$1" | sed -n "s/.*\"$2\": *\(\[[^]]*\]\|[^,}]*\).*/\1/p" | head -n 1 |
+        tr -d '[]' | awk -F', *' -v i="${3:-0}" '{ print $(i + 1) }'
+}
+# near EXPECTED ACTUAL TOL: |e - a| <= tol
+near() { awk -v e="$1" -v a="$2" -v t="$3" 'BEGIN { d = e - a; if (d < 0) d = -d; exit !(a != "" && d <= t) }'; }
+
+# expect_fail NAME EXIT MESSAGE-FRAGMENT -- command...
+expect_fail() {
+    name=$1 code=$2 frag=$3
+    shift 4
+    "$@" >"$tmp/out" 2>"$tmp/err"
+    rc=$?
+    if [ "$rc" -ne "$code" ]; then bad "$name" "exit $rc, expected $code ($(cat "$tmp/err"))"
+    elif ! grep -q -- "$frag" "$tmp/err"; then bad "$name" "stderr lacks '$frag': $(cat "$tmp/err")"
+    elif [ -s "$tmp/out" ]; then bad "$name" "printed on stdout: $(cat "$tmp/out")"
+    else ok "$name"; fi
+}
+
+# 1. offset unit cubes: the box [0, 0.5] x [-.5, .5]^2, exact in binary
+$POLYDEM overlap builtin:cube builtin:cube --pose-a "0 0 0 1 0 0 0" --pose-b "0.5 0 0 1 0 0 0" >"$tmp/o1"
+if near 0.5 "$(json_num "$tmp/o1" volume)" 1e-12 && near 0.25 "$(json_num "$tmp/o1" centroid 0)" 1e-12 &&
+    near 1 "$(json_num "$tmp/o1" normal 0)" 1e-12 && near 0.5 "$(json_num "$tmp/o1" depth)" 1e-12; then
+    ok overlap_offset_cubes
+else bad overlap_offset_cubes "$(cat "$tmp/o1")"; fi
+
+# 2. the contract's key order and full precision
+if grep -Eq '^\{"volume": [-0-9.e]+, "centroid": \[[^]]*\], "normal": \[[^]]*\], "depth": [-0-9.e]+\}$' "$tmp/o1"; then
+    ok overlap_json_shape
+else bad overlap_json_shape "$(cat "$tmp/o1")"; fi
+
+# 3. apart: exactly {"volume": 0}
+$POLYDEM overlap builtin:cube builtin:cube --pose-b "2 0 0 1 0 0 0" >"$tmp/o3"
+if [ "$(cat "$tmp/o3")" = '{"volume": 0}' ]; then ok overlap_apart_is_zero; else bad overlap_apart_is_zero "$(cat "$tmp/o3")"; fi
+
+# 4. face on face (touching) is no overlap either
+$POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 1 1 0 0 0" >"$tmp/o4"
+if [ "$(cat "$tmp/o4")" = '{"volume": 0}' ]; then ok overlap_touching_is_zero; else bad overlap_touching_is_zero "$(cat "$tmp/o4")"; fi
+
+# 5. --opencl agrees with the host path to 1e-12 relative (double precision)
+pa="0.01 0.02 0.03 0.9 0.1 -0.3 0.2"
+pb="0.6 0.3 -0.2 0.5 0.5 0.5 -0.5"
+$POLYDEM overlap builtin:rock:80 builtin:schonhardt --pose-a "$pa" --pose-b "$pb" >"$tmp/h5"
+if $POLYDEM overlap builtin:rock:80 builtin:schonhardt --pose-a "$pa" --pose-b "$pb" --opencl >"$tmp/c5" 2>"$tmp/e5"; then
+    good=1
+    for key in volume depth; do
+        h=$(json_num "$tmp/h5" $key) c=$(json_num "$tmp/c5" $key)
+        near "$h" "$c" "$(awk -v h="$h" 'BEGIN { print (h < 0 ? -h : h) * 1e-12 }')" || good=0
+    done
+    for i in 0 1 2; do
+        near "$(json_num "$tmp/h5" centroid $i)" "$(json_num "$tmp/c5" centroid $i)" 1e-12 || good=0
+        near "$(json_num "$tmp/h5" normal $i)" "$(json_num "$tmp/c5" normal $i)" 1e-12 || good=0
+    done
+    v=$(json_num "$tmp/h5" volume)
+    if [ "$good" = 1 ] && awk -v v="$v" 'BEGIN { exit !(v > 0) }'; then ok overlap_opencl_matches_host
+    else bad overlap_opencl_matches_host "host $(cat "$tmp/h5") opencl $(cat "$tmp/c5")"; fi
+else bad overlap_opencl_matches_host "$(cat "$tmp/e5")"; fi
+
+# 6. --single: close to double (float's 1.2e-7 amplified by the cusp sums' cancellation)
+$POLYDEM overlap builtin:rock:80 builtin:schonhardt --pose-a "$pa" --pose-b "$pb" --single >"$tmp/s6"
+if near "$(json_num "$tmp/h5" volume)" "$(json_num "$tmp/s6" volume)" "$(awk -v h="$(json_num "$tmp/h5" volume)" 'BEGIN { print h * 1e-3 }')"; then
+    ok overlap_single_precision
+else bad overlap_single_precision "$(cat "$tmp/s6") vs $(cat "$tmp/h5")"; fi
+
+# 7. mesh files are used in their own coordinates: an ASCII STL cube at [10,11]^3 and a builtin
+#    unit cube centred at (11, 10.5, 10.5) overlap in [10.5, 11] x [10, 11]^2
+cat >"$tmp/cube.stl" <<'STL'
+solid c
+facet normal 0 0 0
+outer loop
+vertex 10 10 10
+vertex 10 11 10
+vertex 11 10 10
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 11 10 10
+vertex 10 11 10
+vertex 11 11 10
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 10 10 11
+vertex 11 10 11
+vertex 10 11 11
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 11 10 11
+vertex 11 11 11
+vertex 10 11 11
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 10 10 10
+vertex 11 10 10
+vertex 10 10 11
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 11 10 10
+vertex 11 10 11
+vertex 10 10 11
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 10 11 10
+vertex 10 11 11
+vertex 11 11 10
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 11 11 10
+vertex 10 11 11
+vertex 11 11 11
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 10 10 10
+vertex 10 10 11
+vertex 10 11 10
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 10 11 10
+vertex 10 10 11
+vertex 10 11 11
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 11 10 10
+vertex 11 11 10
+vertex 11 10 11
+endloop
+endfacet
+facet normal 0 0 0
+outer loop
+vertex 11 11 10
+vertex 11 11 11
+vertex 11 10 11
+endloop
+endfacet
+endsolid c
+STL
+$POLYDEM overlap "$tmp/cube.stl" builtin:cube --pose-b "11 10.5 10.5 1 0 0 0" >"$tmp/o7"
+if near 0.5 "$(json_num "$tmp/o7" volume)" 1e-12 && near 10.75 "$(json_num "$tmp/o7" centroid 0)" 1e-11 &&
+    near 10.5 "$(json_num "$tmp/o7" centroid 1)" 1e-11 && near 1 "$(json_num "$tmp/o7" normal 0)" 1e-12; then
+    ok overlap_stl_in_file_coordinates
+else bad overlap_stl_in_file_coordinates "$(cat "$tmp/o7")"; fi
+
+# 8. quaternions are normalised: (2,0,0,0) is the identity
+$POLYDEM overlap builtin:cube builtin:cube --pose-b "0.5 0 0 2 0 0 0" >"$tmp/o8"
+if near 0.5 "$(json_num "$tmp/o8" volume)" 1e-12; then ok overlap_normalises_quaternion
+else bad overlap_normalises_quaternion "$(cat "$tmp/o8")"; fi
+
+# 9. mesh-info on a builtin and on the STL
+$POLYDEM mesh-info builtin:cube >"$tmp/m9" && $POLYDEM mesh-info "$tmp/cube.stl" >"$tmp/m9b"
+if near 1 "$(json_num "$tmp/m9" volume)" 1e-12 && [ "$(json_num "$tmp/m9" triangles)" = 12 ] &&
+    near 10.5 "$(json_num "$tmp/m9b" centroid 2)" 1e-12 && grep -q '"closed": true' "$tmp/m9" &&
+    near 0.16666666666666666 "$(json_num "$tmp/m9" principal_moments 0)" 1e-12; then
+    ok mesh_info
+else bad mesh_info "$(cat "$tmp/m9") $(cat "$tmp/m9b")"; fi
+
+# 10-18. bad input: exit 2 and a message naming what is wrong, nothing on stdout
+head -n 78 "$tmp/cube.stl" >"$tmp/open.stl" # 11 of the 12 facets: one hole
+echo "endsolid c" >>"$tmp/open.stl"
+expect_fail missing_file 2 "nope.stl" -- $POLYDEM overlap "$tmp/nope.stl" builtin:cube
+expect_fail open_mesh 2 "open edge" -- $POLYDEM overlap "$tmp/open.stl" builtin:cube
+expect_fail pose_too_few_numbers 2 "--pose-a" -- $POLYDEM overlap builtin:cube builtin:cube --pose-a "0 0 0 1 0 0"
+expect_fail pose_not_a_number 2 "--pose-b" -- $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 x 1 0 0 0"
+expect_fail zero_quaternion 2 "quaternion" -- $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 0 0 0 0 0"
+expect_fail one_mesh_only 2 "two meshes" -- $POLYDEM overlap builtin:cube
+expect_fail unknown_option 2 "--bogus" -- $POLYDEM overlap builtin:cube builtin:cube --bogus
+expect_fail unknown_builtin 2 "dodecahedron" -- $POLYDEM mesh-info builtin:dodecahedron
+expect_fail unknown_command 2 "frobnicate" -- $POLYDEM frobnicate
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
