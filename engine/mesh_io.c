@@ -183,6 +183,16 @@ static int tok_double(const char *tok, size_t len, double *out)
 }
 
 /* Copies a token for an error message, at most 40 bytes, with unprintable bytes as '?'. */
+/* Reads the line's next three tokens as numbers; 0 when one is missing or not a number. */
+static int tok_vec3(line_toks *lt, double x[3])
+{
+    const char *tok;
+    size_t tl;
+    for (int k = 0; k < 3; k++)
+        if (!next_tok(lt, &tok, &tl) || !tok_double(tok, tl, &x[k])) return 0;
+    return 1;
+}
+
 static const char *tok_show(const char *tok, size_t len, char buf[41])
 {
     size_t n = len > 40 ? 40 : len;
@@ -245,12 +255,9 @@ static int parse_stl_ascii(const char *label, const char *buf, size_t len, pd_me
             state = IN_SOLID;
         } else if (state == IN_LOOP && tok_is(tok, tl, "vertex")) {
             double x[3];
-            for (int k = 0; k < 3; k++) {
-                if (!next_tok(&lt, &tok, &tl) || !tok_double(tok, tl, &x[k])) {
-                    rc =
-                        pd_error_set(err, PD_EMESH, "%s:%d: vertex needs 3 numbers", label, lineno);
-                    goto fail;
-                }
+            if (!tok_vec3(&lt, x)) {
+                rc = pd_error_set(err, PD_EMESH, "%s:%d: vertex needs 3 numbers", label, lineno);
+                goto fail;
             }
             if (++loop_verts > 3) {
                 rc = pd_error_set(err, PD_EMESH, "%s:%d: facet with more than 3 vertices", label,
@@ -347,12 +354,9 @@ static int parse_obj(const char *label, const char *buf, size_t len, pd_mesh **o
         if (!next_tok(&lt, &tok, &tl)) continue;
         if (tok_is(tok, tl, "v")) {
             double x[3];
-            for (int k = 0; k < 3; k++) {
-                if (!next_tok(&lt, &tok, &tl) || !tok_double(tok, tl, &x[k])) {
-                    rc =
-                        pd_error_set(err, PD_EMESH, "%s:%d: vertex needs 3 numbers", label, lineno);
-                    goto fail;
-                }
+            if (!tok_vec3(&lt, x)) {
+                rc = pd_error_set(err, PD_EMESH, "%s:%d: vertex needs 3 numbers", label, lineno);
+                goto fail;
             }
             if (nv >= 3 * (size_t)MESH_MAX_TRIS) {
                 rc = pd_error_set(err, PD_EMESH, "%s:%d: too many vertices (the limit is %d)",
