@@ -112,6 +112,10 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
         in[i].nta = s->nta;
         in[i].vb = s->vb;
         in[i].tb = s->tb;
+        in[i].vt_a_off = s->vt_a_off;
+        in[i].vt_a = s->vt_a;
+        in[i].vt_b_off = s->vt_b_off;
+        in[i].vt_b = s->vt_b;
         in[i].nvb = s->nvb;
         in[i].ntb = s->ntb;
         memcpy(in[i].rot, s->rot, sizeof s->rot);

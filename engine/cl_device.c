@@ -199,7 +199,7 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     size_t n_va = 3 * (size_t)s->nva, n_vb = 3 * (size_t)s->nvb, n_xf = 18 * (size_t)npairs;
     void *hva = malloc(rs * n_va), *hvb = malloc(rs * n_vb), *hxf = malloc(rs * n_xf);
     void *hout = malloc(rs * 12 * (size_t)npairs);
-    cl_mem b[8] = {0};
+    cl_mem b[12] = {0};
     cl_int e = CL_SUCCESS;
     rc = PD_OK;
     if (!hva || !hvb || !hxf || !hout) {
@@ -217,6 +217,13 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     if (e == CL_SUCCESS)
         b[3] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->ntb, (void *)s->tb, &e);
     if (e == CL_SUCCESS) b[4] = clCreateBuffer(dev->ctx, ro, rs * n_xf, hxf, &e);
+    if (e == CL_SUCCESS)
+        b[8] = clCreateBuffer(dev->ctx, ro, sizeof(int) * (s->nva + 1), s->vt_a_off, &e);
+    if (e == CL_SUCCESS) b[9] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->nta, s->vt_a, &e);
+    if (e == CL_SUCCESS)
+        b[10] = clCreateBuffer(dev->ctx, ro, sizeof(int) * (s->nvb + 1), s->vt_b_off, &e);
+    if (e == CL_SUCCESS)
+        b[11] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->ntb, s->vt_b, &e);
     if (e == CL_SUCCESS)
         b[5] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);
     if (e == CL_SUCCESS)
@@ -240,6 +247,8 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[3]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->nvb);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->ntb);
+    for (int i = 8; i < 12; i++)
+        args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[i]);
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[4]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &npairs);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->flags);
@@ -267,7 +276,7 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     for (size_t i = 0; i < 12 * (size_t)npairs; i++)
         out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
 done:
-    for (int i = 0; i < 8; i++)
+    for (int i = 0; i < 12; i++)
         if (b[i]) clReleaseMemObject(b[i]);
     free(hva);
     free(hvb);

@@ -22,6 +22,31 @@ static int quat_normalised(const double q[4], double out[4])
     return 1;
 }
 
+/* Vertex -> triangle table of m in CSR form (see ovl_in in kernels/overlap.h). */
+static int vertex_triangles(const pd_mesh *m, int **off_out, int **vt_out)
+{
+    int *off = calloc((size_t)m->nverts + 1, sizeof *off);
+    int *vt = malloc(sizeof *vt * 3 * (size_t)m->ntris);
+    if (!off || !vt) {
+        free(off);
+        free(vt);
+        return PD_ENOMEM;
+    }
+    for (int i = 0; i < 3 * m->ntris; i++)
+        off[m->tris[i] + 1]++;
+    for (int v = 0; v < m->nverts; v++)
+        off[v + 1] += off[v];
+    for (int t = 0; t < m->ntris; t++) /* off[v] walks forward as v's triangles are placed */
+        for (int q = 0; q < 3; q++)
+            vt[off[m->tris[3 * t + q]]++] = t;
+    for (int v = m->nverts; v > 0; v--)
+        off[v] = off[v - 1]; /* and is shifted back */
+    off[0] = 0;
+    *off_out = off;
+    *vt_out = vt;
+    return PD_OK;
+}
+
 int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const pd_pose *pb,
                    int flags, ovl_setup *s, pd_error *err)
 {
@@ -46,7 +71,11 @@ int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const 
     pd_mesh_mass_props(a, &ma);
     pd_mesh_mass_props(b, &mb);
     s->va = malloc(sizeof(double) * 3 * (size_t)a->nverts);
-    if (!s->va) return pd_error_set(err, PD_ENOMEM, "overlap: out of memory");
+    if (!s->va || vertex_triangles(a, &s->vt_a_off, &s->vt_a) != PD_OK ||
+        vertex_triangles(b, &s->vt_b_off, &s->vt_b) != PD_OK) {
+        ovl_setup_free(s);
+        return pd_error_set(err, PD_ENOMEM, "overlap: out of memory");
+    }
     /* A's frame: A's mesh axes, origin at A's centroid (figure 5.4) */
     for (int i = 0; i < a->nverts; i++)
         for (int k = 0; k < 3; k++)
@@ -86,7 +115,12 @@ int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const 
 void ovl_setup_free(ovl_setup *s)
 {
     free(s->va);
+    free(s->vt_a_off);
+    free(s->vt_a);
+    free(s->vt_b_off);
+    free(s->vt_b);
     s->va = NULL;
+    s->vt_a_off = s->vt_a = s->vt_b_off = s->vt_b = NULL;
 }
 
 void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *out)

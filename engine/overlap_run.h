@@ -16,8 +16,9 @@ typedef struct ovl_setup {
     const double *vb; /* B's vertices in B's mesh frame */
     const int *tb;
     int nvb, ntb;
-    double rot[9], tr[3]; /* B's frame -> A's frame */
-    double ca[3], cb[3];  /* centroids in A's frame */
+    int *vt_a_off, *vt_a, *vt_b_off, *vt_b; /* vertex -> triangle tables (owned) */
+    double rot[9], tr[3];                   /* B's frame -> A's frame */
+    double ca[3], cb[3];                    /* centroids in A's frame */
     double vol_a, vol_b;
     int flags;
     /* A's frame -> world: world = ra * (p + ca_mesh) + xa */

@@ -9,6 +9,8 @@
 
 __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, int nva, int nta,
                             __global const pd_real *vb, __global const int *tb, int nvb, int ntb,
+                            __global const int *vt_a_off, __global const int *vt_a,
+                            __global const int *vt_b_off, __global const int *vt_b,
                             __global const pd_real *xf, int npairs, int flags, pd_real vol_a,
                             pd_real vol_b, __global int *iscr, __global pd_real *rscr, int pts_cap,
                             __global pd_real *out)
@@ -23,6 +25,10 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
     in.nta = nta;
     in.vb = vb;
     in.tb = tb;
+    in.vt_a_off = vt_a_off;
+    in.vt_a = vt_a;
+    in.vt_b_off = vt_b_off;
+    in.vt_b = vt_b;
     in.nvb = nvb;
     in.ntb = ntb;
     for (int i = 0; i < 9; i++)

@@ -50,6 +50,10 @@ typedef struct ovl_in {
     PD_GLOBAL const pd_real *vb; /* B's vertices in B's own frame */
     PD_GLOBAL const int *tb;
     int nvb, ntb;
+    /* optional vertex -> triangle tables (CSR: the triangles of vertex i are
+     * vt[vt_off[i] .. vt_off[i+1]-1]); with them the filter visits only the triangles of the
+     * vertices that reach into the other's half-plane; NULL: it classifies every triangle */
+    PD_GLOBAL const int *vt_a_off, *vt_a, *vt_b_off, *vt_b;
     pd_real rot[9]; /* B's frame -> A's frame, row-major: p = rot * v + tr */
     pd_real tr[3];
     pd_v3 ca, cb;         /* centroids of A and B in A's frame (filter direction, eq. 5.3) */
@@ -93,7 +97,8 @@ typedef struct ovl_ctx {
     int ka, kb; /* triangles kept by the half-plane filter: the ray casts' candidates */
     int na, nb; /* of those, the ones meeting the box where A n B can lie: the pair loop's */
     PD_GLOBAL int *kept_a, *kept_b, *near_a, *near_b, *st_a, *st_b;
-    pd_v3 box_lo, box_hi; /* box of A's kept part n box of B's kept part, padded */
+    pd_v3 box_lo, box_hi;     /* box of A's kept part n box of B's kept part, padded */
+    pd_v3 alo, ahi, blo, bhi; /* boxes of A's and B's kept parts, padded */
     PD_GLOBAL pd_real *proj_a, *proj_b, *vbt, *pts, *ucache;
     int npts, pts_overflow, store_pts;
     pd_real pad;        /* OVL_SNAP * L: the configuration's length resolution */
@@ -255,6 +260,30 @@ PD_FN void ovl_crossing_cusps(ovl_ctx *c, pd_v3 p, pd_v3 te, pd_v3 m, pd_v3 nf, 
     ovl_node(c, p);
 }
 
+/*
+ * Box of the ray p + t r (t >= 0) up to where it leaves the box [lo, hi]: the kept triangles it
+ * can cross all lie inside [lo, hi], so a triangle whose box misses this one is not crossed.
+ */
+PD_FN void ovl_ray_box(pd_v3 p, pd_v3 r, pd_v3 lo, pd_v3 hi, pd_real pad, pd_v3 *rlo, pd_v3 *rhi)
+{
+    pd_real t = PD_REAL_MAX;
+    if (r.x != PD_R(0)) t = pd_min(t, ((r.x > 0 ? hi.x : lo.x) - p.x) / r.x);
+    if (r.y != PD_R(0)) t = pd_min(t, ((r.y > 0 ? hi.y : lo.y) - p.y) / r.y);
+    if (r.z != PD_R(0)) t = pd_min(t, ((r.z > 0 ? hi.z : lo.z) - p.z) / r.z);
+    t = pd_max(t, PD_R(0));
+    pd_v3 q = v3_add(p, v3_scale(r, t));
+    *rlo = v3(pd_min(p.x, q.x) - pad, pd_min(p.y, q.y) - pad, pd_min(p.z, q.z) - pad);
+    *rhi = v3(pd_max(p.x, q.x) + pad, pd_max(p.y, q.y) + pad, pd_max(p.z, q.z) + pad);
+}
+
+/* Whether triangle (u0, u1, u2) can meet the box [lo, hi]. */
+PD_FN int ovl_tri_meets(pd_v3 u0, pd_v3 u1, pd_v3 u2, pd_v3 lo, pd_v3 hi)
+{
+    return !(pd_max(pd_max(u0.x, u1.x), u2.x) < lo.x || pd_min(pd_min(u0.x, u1.x), u2.x) > hi.x ||
+             pd_max(pd_max(u0.y, u1.y), u2.y) < lo.y || pd_min(pd_min(u0.y, u1.y), u2.y) > hi.y ||
+             pd_max(pd_max(u0.z, u1.z), u2.z) < lo.z || pd_min(pd_min(u0.z, u1.z), u2.z) > hi.z);
+}
+
 PD_FN int ovl_in_box(const ovl_ctx *c, pd_v3 p)
 {
     return p.x >= c->box_lo.x && p.x <= c->box_hi.x && p.y >= c->box_lo.y && p.y <= c->box_hi.y &&
@@ -269,11 +298,14 @@ PD_FN int ovl_inside_b(ovl_ctx *c, int i)
     if (c->filter && c->proj_a[i] < c->e2) return 0; /* below B's half-plane: outside */
     if (c->filter && !ovl_in_box(c, p)) return 0;    /* outside B's kept part's box */
     pd_v3 r = v3_scale(c->d, PD_R(-1));
+    pd_v3 rlo, rhi;
+    ovl_ray_box(p, r, c->blo, c->bhi, c->pad, &rlo, &rhi);
     int odd = 0;
     for (int k = 0; k < c->kb; k++) {
         int u = c->kept_b[k];
         int i0 = tb[3 * u], i1 = tb[3 * u + 1], i2 = tb[3 * u + 2];
         pd_v3 u0 = ovl_vb(c, i0), u1 = ovl_vb(c, i1), u2 = ovl_vb(c, i2);
+        if (c->filter && !ovl_tri_meets(u0, u1, u2, rlo, rhi)) continue;
         pd_v3 nu = v3_cross(v3_sub(u1, u0), v3_sub(u2, u0));
         pd_real rn = v3_dot(r, nu);
         /* a ray parallel to the plane, to within rounding, never crosses it (exactly parallel
@@ -308,11 +340,14 @@ PD_FN int ovl_inside_a(ovl_ctx *c, int j)
     if (c->filter && !ovl_in_box(c, u)) return 0;
 
     pd_v3 r = c->d;
+    pd_v3 rlo, rhi;
+    ovl_ray_box(u, r, c->alo, c->ahi, c->pad, &rlo, &rhi);
     int odd = 0;
     for (int k = 0; k < c->ka; k++) {
         int t = c->kept_a[k];
         int i0 = ta[3 * t], i1 = ta[3 * t + 1], i2 = ta[3 * t + 2];
         pd_v3 t0 = ovl_va(c, i0), t1 = ovl_va(c, i1), t2 = ovl_va(c, i2);
+        if (c->filter && !ovl_tri_meets(t0, t1, t2, rlo, rhi)) continue;
         pd_v3 nt = v3_cross(v3_sub(t1, t0), v3_sub(t2, t0));
         pd_real rn = v3_dot(r, nt);
         if (PD_FABS(rn) <= c->tol2) continue; /* parallel */
@@ -547,10 +582,13 @@ PD_FN void ovl_pass(ovl_ctx *c)
     PD_GLOBAL const int *tb = c->in->tb;
     c->vol = PD_R(0);
     c->moment = c->area_a = c->area_b = v3(0, 0, 0);
-    for (int i = 0; i < c->in->nva; i++)
-        c->st_a[i] &= OVL_V_READY;
-    for (int j = 0; j < c->in->nvb; j++)
-        c->st_b[j] &= OVL_V_READY;
+    /* only the kept triangles' corners are ever tested */
+    for (int k = 0; k < c->ka; k++)
+        for (int q = 0; q < 3; q++)
+            c->st_a[ta[3 * c->kept_a[k] + q]] &= OVL_V_READY;
+    for (int l = 0; l < c->kb; l++)
+        for (int q = 0; q < 3; q++)
+            c->st_b[tb[3 * c->kept_b[l] + q]] &= OVL_V_READY;
 
     for (int k = 0; k < c->na; k++) {
         int t = c->near_a[k];
@@ -597,6 +635,22 @@ PD_FN void ovl_pass(ovl_ctx *c)
             int qp = (q + 2) % 3;
             ovl_cusp(c, U.p[q], U.e[q], U.m[q], U.nu, 1);
             ovl_cusp(c, U.p[q], v3_scale(U.e[qp], PD_R(-1)), U.m[qp], U.nu, 1);
+        }
+    }
+}
+
+/*
+ * Sorts an index list ascending in place: insertion sort for the short, nearly sorted lists of a
+ * DEM contact, Shell sort beyond (no recursion, no extra memory).
+ */
+PD_FN void ovl_sort(PD_GLOBAL int *a, int n)
+{
+    for (int gap = n > 64 ? n / 2 : 1; gap > 0; gap = gap == 2 ? 1 : gap * 5 / 11) {
+        for (int i = gap; i < n; i++) {
+            int x = a[i], j = i;
+            for (; j >= gap && a[j - gap] > x; j -= gap)
+                a[j] = a[j - gap];
+            a[j] = x;
         }
     }
 }
@@ -672,21 +726,52 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         ovl_miss(o, c);
         return;
     }
-    for (int t = 0; t < in->nta; t++) {
-        PD_GLOBAL const int *v = in->ta + 3 * t;
-        pd_real mx = pd_max(pd_max(c->proj_a[v[0]], c->proj_a[v[1]]), c->proj_a[v[2]]);
-        if (!c->filter || mx >= c->e2) c->kept_a[c->ka++] = t;
-    }
-    for (int u = 0; u < in->ntb; u++) {
-        PD_GLOBAL const int *v = in->tb + 3 * u;
-        pd_real mn = pd_min(pd_min(c->proj_b[v[0]], c->proj_b[v[1]]), c->proj_b[v[2]]);
-        if (!c->filter || mn <= c->e1) c->kept_b[c->kb++] = u;
+    if (c->filter && in->vt_a_off && in->vt_b_off) {
+        /* A triangle is kept from its first corner that reaches into the other's half-plane, so
+         * each is listed once; the lists are sorted so that the cusps are summed in the same
+         * order as without the filter (identical results). */
+        for (int i = 0; i < in->nva; i++) {
+            if (!(c->proj_a[i] >= c->e2)) continue;
+            for (int k = in->vt_a_off[i]; k < in->vt_a_off[i + 1]; k++) {
+                int t = in->vt_a[k];
+                PD_GLOBAL const int *v = in->ta + 3 * t;
+                int first = v[0] == i ? 1
+                            : v[1] == i
+                                ? !(c->proj_a[v[0]] >= c->e2)
+                                : !(c->proj_a[v[0]] >= c->e2) && !(c->proj_a[v[1]] >= c->e2);
+                if (first) c->kept_a[c->ka++] = t;
+            }
+        }
+        for (int j = 0; j < in->nvb; j++) {
+            if (!(c->proj_b[j] <= c->e1)) continue;
+            for (int k = in->vt_b_off[j]; k < in->vt_b_off[j + 1]; k++) {
+                int u = in->vt_b[k];
+                PD_GLOBAL const int *v = in->tb + 3 * u;
+                int first = v[0] == j ? 1
+                            : v[1] == j
+                                ? !(c->proj_b[v[0]] <= c->e1)
+                                : !(c->proj_b[v[0]] <= c->e1) && !(c->proj_b[v[1]] <= c->e1);
+                if (first) c->kept_b[c->kb++] = u;
+            }
+        }
+        ovl_sort(c->kept_a, c->ka);
+        ovl_sort(c->kept_b, c->kb);
+    } else {
+        for (int t = 0; t < in->nta; t++) {
+            PD_GLOBAL const int *v = in->ta + 3 * t;
+            pd_real mx = pd_max(pd_max(c->proj_a[v[0]], c->proj_a[v[1]]), c->proj_a[v[2]]);
+            if (!c->filter || mx >= c->e2) c->kept_a[c->ka++] = t;
+        }
+        for (int u = 0; u < in->ntb; u++) {
+            PD_GLOBAL const int *v = in->tb + 3 * u;
+            pd_real mn = pd_min(pd_min(c->proj_b[v[0]], c->proj_b[v[1]]), c->proj_b[v[2]]);
+            if (!c->filter || mn <= c->e1) c->kept_b[c->kb++] = u;
+        }
     }
     if (c->ka == 0 || c->kb == 0) {
         ovl_miss(o, c);
         return;
     }
-    pd_real lsc = PD_R(0); /* L: largest coordinate magnitude in play */
     pd_v3 alo = v3(PD_REAL_MAX, PD_REAL_MAX, PD_REAL_MAX), ahi = v3_scale(alo, PD_R(-1));
     pd_v3 blo = alo, bhi = ahi;
     for (int k = 0; k < c->ka; k++) {
@@ -695,7 +780,6 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
             pd_v3 x = v3_load(in->va, v[q]);
             alo = v3(pd_min(alo.x, x.x), pd_min(alo.y, x.y), pd_min(alo.z, x.z));
             ahi = v3(pd_max(ahi.x, x.x), pd_max(ahi.y, x.y), pd_max(ahi.z, x.z));
-            lsc = pd_max(lsc, v3_amax(x));
         }
     }
     /* map the vertices of B's kept triangles into A's frame */
@@ -712,9 +796,10 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
             c->st_b[j] = OVL_V_READY;
             blo = v3(pd_min(blo.x, y.x), pd_min(blo.y, y.y), pd_min(blo.z, y.z));
             bhi = v3(pd_max(bhi.x, y.x), pd_max(bhi.y, y.y), pd_max(bhi.z, y.z));
-            lsc = pd_max(lsc, v3_amax(y));
         }
     }
+    /* L: the largest coordinate magnitude in play */
+    pd_real lsc = pd_max(pd_max(v3_amax(alo), v3_amax(ahi)), pd_max(v3_amax(blo), v3_amax(bhi)));
     /* the resolution: coordinates carry about OVL_SNAP * L of rounding from the transforms */
     c->pad = OVL_SNAP * lsc;
     c->tol2 = c->pad * lsc;
@@ -726,6 +811,11 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
      * through a kept triangle). So only triangles meeting the intersection of the two boxes can
      * emit cusps, and a vertex outside it is outside the other solid.
      */
+    pd_v3 padv = v3(c->pad, c->pad, c->pad);
+    c->alo = v3_sub(alo, padv);
+    c->ahi = v3_add(ahi, padv);
+    c->blo = v3_sub(blo, padv);
+    c->bhi = v3_add(bhi, padv);
     c->box_lo = v3(pd_max(alo.x, blo.x) - c->pad, pd_max(alo.y, blo.y) - c->pad,
                    pd_max(alo.z, blo.z) - c->pad);
     c->box_hi = v3(pd_min(ahi.x, bhi.x) + c->pad, pd_min(ahi.y, bhi.y) + c->pad,
