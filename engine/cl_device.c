@@ -147,6 +147,86 @@ int pd_device_has_fp64(const pd_device *dev)
     return dev->fp64;
 }
 
+static void to_real(void *buf, const double *x, size_t n, int dbl);
+
+/* Builds one embedded program; on failure the error quotes the build log. */
+static int build_program(pd_device *dev, const char *name, const char *src, int dbl,
+                         cl_program *out, pd_error *err)
+{
+    cl_int e;
+    cl_program prog = clCreateProgramWithSource(dev->ctx, 1, &src, NULL, &e);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateProgramWithSource", e);
+    e = clBuildProgram(prog, 1, &dev->device, dbl ? "-DPD_DOUBLE=1" : "-DPD_DOUBLE=0", NULL, NULL);
+    if (e != CL_SUCCESS) {
+        char log[4096] = {0};
+        clGetProgramBuildInfo(prog, dev->device, CL_PROGRAM_BUILD_LOG, sizeof log - 1, log, NULL);
+        clReleaseProgram(prog);
+        return pd_error_set(err, PD_ECL, "opencl: building %s.cl (%s) failed: %.400s", name,
+                            dbl ? "double" : "single", log);
+    }
+    *out = prog;
+    return PD_OK;
+}
+
+int pd_device_compile_all(pd_device *dev, pd_error *err)
+{
+    for (size_t i = 0; i < sizeof pd_cl_sources / sizeof pd_cl_sources[0]; i++)
+        for (int dbl = 0; dbl <= dev->fp64; dbl++) {
+            cl_program p;
+            int rc =
+                build_program(dev, pd_cl_sources[i].name, pd_cl_sources[i].source, dbl, &p, err);
+            if (rc != PD_OK) return rc;
+            clReleaseProgram(p);
+        }
+    return PD_OK;
+}
+
+int pd_forces_cl(pd_device *dev, const double *in, int n, int dbl, double *out, pd_error *err)
+{
+    if (dbl && !dev->fp64)
+        return pd_error_set(err, PD_ECL, "opencl: device '%s' has no cl_khr_fp64", dev->name);
+    cl_program prog;
+    int rc = build_program(dev, "forces", pd_cl_source_forces, dbl, &prog, err);
+    if (rc != PD_OK) return rc;
+    size_t rs = dbl ? sizeof(double) : sizeof(float);
+    void *hin = malloc(rs * 6 * (size_t)n), *hout = malloc(rs * 2 * (size_t)n);
+    cl_mem bin = NULL, bout = NULL;
+    cl_kernel k = NULL;
+    cl_int e = CL_SUCCESS;
+    if (!hin || !hout) {
+        rc = pd_error_set(err, PD_ENOMEM, "opencl forces: out of memory");
+        goto done;
+    }
+    to_real(hin, in, 6 * (size_t)n, dbl);
+    k = clCreateKernel(prog, "hertz_volume_normal", &e);
+    if (e == CL_SUCCESS)
+        bin =
+            clCreateBuffer(dev->ctx, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, rs * 6 * n, hin, &e);
+    if (e == CL_SUCCESS) bout = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * 2 * n, NULL, &e);
+    if (e == CL_SUCCESS) e = clSetKernelArg(k, 0, sizeof bin, &bin);
+    if (e == CL_SUCCESS) e = clSetKernelArg(k, 1, sizeof n, &n);
+    if (e == CL_SUCCESS) e = clSetKernelArg(k, 2, sizeof bout, &bout);
+    size_t global = (size_t)n;
+    if (e == CL_SUCCESS)
+        e = clEnqueueNDRangeKernel(dev->queue, k, 1, NULL, &global, NULL, 0, NULL, NULL);
+    if (e == CL_SUCCESS)
+        e = clEnqueueReadBuffer(dev->queue, bout, CL_TRUE, 0, rs * 2 * n, hout, 0, NULL, NULL);
+    if (e != CL_SUCCESS) {
+        rc = CL_FAIL(err, "hertz_volume_normal", e);
+        goto done;
+    }
+    for (size_t i = 0; i < 2 * (size_t)n; i++)
+        out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
+done:
+    if (bin) clReleaseMemObject(bin);
+    if (bout) clReleaseMemObject(bout);
+    if (k) clReleaseKernel(k);
+    clReleaseProgram(prog);
+    free(hin);
+    free(hout);
+    return rc;
+}
+
 /* Compiles the overlap program for one precision on first use. */
 static int device_program(pd_device *dev, int dbl, pd_error *err)
 {
@@ -154,19 +234,10 @@ static int device_program(pd_device *dev, int dbl, pd_error *err)
     if (dbl && !dev->fp64)
         return pd_error_set(
             err, PD_ECL, "opencl: device '%s' has no cl_khr_fp64; use single precision", dev->name);
-    const char *src = pd_cl_source_overlap;
+    cl_program prog;
     cl_int e;
-    cl_program prog = clCreateProgramWithSource(dev->ctx, 1, &src, NULL, &e);
-    if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateProgramWithSource", e);
-    const char *opts = dbl ? "-DPD_DOUBLE=1" : "-DPD_DOUBLE=0";
-    e = clBuildProgram(prog, 1, &dev->device, opts, NULL, NULL);
-    if (e != CL_SUCCESS) {
-        char log[4096] = {0};
-        clGetProgramBuildInfo(prog, dev->device, CL_PROGRAM_BUILD_LOG, sizeof log - 1, log, NULL);
-        clReleaseProgram(prog);
-        return pd_error_set(err, PD_ECL, "opencl: building overlap.cl (%s) failed: %.400s",
-                            dbl ? "double" : "single", log);
-    }
+    int rc = build_program(dev, "overlap", pd_cl_source_overlap, dbl, &prog, err);
+    if (rc != PD_OK) return rc;
     cl_kernel k = clCreateKernel(prog, "overlap_pairs", &e);
     if (e != CL_SUCCESS) {
         clReleaseProgram(prog);

@@ -149,6 +149,19 @@ void pd_device_close(pd_device *dev);
 const char *pd_device_name(const pd_device *dev);
 int pd_device_has_fp64(const pd_device *dev);
 
+/*
+ * Compiles every embedded OpenCL program for dev, in single precision and, where the device has
+ * cl_khr_fp64, in double: a self-test that the shared kernel headers build as OpenCL C there.
+ * The error names the program and precision and quotes the build log.
+ */
+int pd_device_compile_all(pd_device *dev, pd_error *err);
+
+/*
+ * Volumetric Hertz normal forces (thesis eq. 4.16) for n contacts on dev: in holds 6 doubles per
+ * contact (V m^3, delta m, E* Pa, m* kg, gamma, vn m/s), out receives 2 (F_n N, k_n N/m).
+ */
+int pd_forces_cl(pd_device *dev, const double *in, int n, int dbl, double *out, pd_error *err);
+
 /* The same overlap as pd_overlap_host, run by the OpenCL kernel on dev. */
 int pd_overlap_cl(pd_device *dev, const pd_mesh *a, const pd_pose *pa, const pd_mesh *b,
                   const pd_pose *pb, int flags, pd_contact *out, pd_error *err);

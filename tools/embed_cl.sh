@@ -23,3 +23,10 @@ for f in "$@"; do
         BEGIN { emit(ARGV[1]); ARGV[1] = ""; }' "$f"
     echo "    ;"
 done
+# the table of all programs, for building every one (device self-test)
+echo "static const struct { const char *name; const char *source; } pd_cl_sources[] = {"
+for f in "$@"; do
+    name=$(basename "$f" .cl)
+    echo "    {\"$name\", pd_cl_source_${name}},"
+done
+echo "};"
