@@ -1,0 +1,35 @@
+/*
+ * integrate.cl - the integration stage (kernels/integrate.h), one work-item per particle, on
+ * packed arrays: x, v, L, f, torque as 3 reals per particle, q as 4 (w first), inv_i as the 3
+ * inverse principal moments, inv_m one real. Built with -DPD_DOUBLE=0 or 1.
+ */
+#include "pd_real.h"
+#include "integrate.h"
+
+/* Half kick (h = dt/2): v += f/m h, L += torque h. */
+__kernel void integrate_kick(__global pd_real *v, __global pd_real *L, __global const pd_real *f,
+                             __global const pd_real *torque, __global const pd_real *inv_m, int n,
+                             pd_real h)
+{
+    int i = (int)get_global_id(0);
+    if (i >= n) return;
+    v3_store(v, i, int_kick(v3_load(v, i), v3_load(f, i), inv_m[i], h));
+    v3_store(L, i, int_kick(v3_load(L, i), v3_load(torque, i), PD_R(1), h));
+}
+
+/* Drift: x += v dt, and q turned by Euler's equations at constant L. */
+__kernel void integrate_drift(__global pd_real *x, __global const pd_real *v, __global pd_real *q,
+                              __global const pd_real *L, __global const pd_real *inv_i, int n,
+                              pd_real dt)
+{
+    int i = (int)get_global_id(0);
+    if (i >= n) return;
+    v3_store(x, i, v3_add(v3_load(x, i), v3_scale(v3_load(v, i), dt)));
+    __global pd_real *qi = q + 4 * i;
+    pd_q4 r =
+        int_drift_rotation(q4(qi[0], qi[1], qi[2], qi[3]), v3_load(L, i), v3_load(inv_i, i), dt);
+    qi[0] = r.w;
+    qi[1] = r.x;
+    qi[2] = r.y;
+    qi[3] = r.z;
+}
