@@ -4,6 +4,7 @@
  *   polydem overlap A B --pose-a "x y z qw qx qy qz" --pose-b "..." [--opencl] [--single]
  *                       [--no-filter] [--device N]
  *   polydem mesh-info FILE|builtin:NAME[:TRIANGLES[:SEED]]
+ *   polydem devices [--json]
  *
  * Output is one JSON object on stdout, SI units, full double precision. Bad arguments or meshes
  * print a message on stderr and exit 2.
@@ -30,6 +31,9 @@ static const char *usage_text =
     "  mesh-info FILE|builtin:NAME[:TRIANGLES[:SEED]]\n"
     "      triangles, vertices, volume, centroid, inertia and principal moments\n"
     "      (inertia per unit density, m^5 = kg m^2 at 1 kg/m^3)\n"
+    "\n"
+    "  devices [--json]\n"
+    "      the OpenCL devices; N is what --device N takes\n"
     "\n"
     "builtin shapes: cube, tetrahedron, schonhardt, icosphere[:20|80|320|1280|5120],\n"
     "                rock[:TRIANGLES[:SEED]]\n";
@@ -195,6 +199,36 @@ static int cmd_mesh_info(int argc, char **argv)
     return 0;
 }
 
+static int cmd_devices(int argc, char **argv)
+{
+    int json = argc == 3 && !strcmp(argv[2], "--json");
+    if (argc > 3 || (argc == 3 && !json))
+        return fail("devices: unexpected argument \"%s\" (only --json)%s", argv[argc - 1], "");
+    pd_device_info info[64];
+    int n = 0;
+    pd_error err = {0};
+    if (pd_device_list(info, 64, &n, &err) != PD_OK) {
+        fprintf(stderr, "polydem: %s\n", err.msg);
+        return 1;
+    }
+    if (n > 64) n = 64;
+    if (json) printf("[");
+    for (int i = 0; i < n; i++) {
+        const pd_device_info *d = &info[i];
+        if (json)
+            printf("%s{\"index\": %d, \"name\": \"%s\", \"platform\": \"%s\", \"type\": \"%s\", "
+                   "\"compute_units\": %d, \"global_mem_bytes\": %.0f, \"fp64\": %s}",
+                   i ? ", " : "", d->index, d->name, d->platform, d->type, d->compute_units,
+                   d->global_mem_bytes, d->fp64 ? "true" : "false");
+        else
+            printf("%d: %s [%s, %s], %d compute units, %.1f GiB, %s\n", d->index, d->name,
+                   d->platform, d->type, d->compute_units, d->global_mem_bytes / 1073741824.0,
+                   d->fp64 ? "double and single precision" : "single precision only");
+    }
+    if (json) printf("]\n");
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     if (argc < 2) {
@@ -207,6 +241,7 @@ int main(int argc, char **argv)
     }
     if (!strcmp(argv[1], "overlap")) return cmd_overlap(argc, argv);
     if (!strcmp(argv[1], "mesh-info")) return cmd_mesh_info(argc, argv);
+    if (!strcmp(argv[1], "devices")) return cmd_devices(argc, argv);
     fprintf(stderr, "polydem: unknown command \"%s\"\n\n%s", argv[1], usage_text);
     return EXIT_USAGE;
 }

@@ -56,6 +56,49 @@ static const char *cl_errstr(cl_int e)
 #define CL_FAIL(err, what, e)                                                                      \
     pd_error_set(err, PD_ECL, "opencl: %s failed: %s (%d)", what, cl_errstr(e), (int)(e))
 
+int pd_device_list(pd_device_info *out, int max, int *n, pd_error *err)
+{
+    cl_platform_id plats[16];
+    cl_uint nplat = 0;
+    cl_int e = clGetPlatformIDs(16, plats, &nplat);
+    *n = 0;
+    if (e != CL_SUCCESS || nplat == 0)
+        return pd_error_set(err, PD_ECL,
+                            "opencl: no platform found (%s); install an OpenCL "
+                            "driver, e.g. pocl-opencl-icd",
+                            cl_errstr(e));
+    for (cl_uint p = 0; p < nplat && p < 16; p++) {
+        cl_device_id devs[32];
+        cl_uint ndev = 0;
+        char pname[128] = {0};
+        clGetPlatformInfo(plats[p], CL_PLATFORM_NAME, sizeof pname - 1, pname, NULL);
+        if (clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, 32, devs, &ndev) != CL_SUCCESS) continue;
+        for (cl_uint d = 0; d < ndev && d < 32; d++, (*n)++) {
+            if (*n >= max) continue;
+            pd_device_info *o = &out[*n];
+            memset(o, 0, sizeof *o);
+            o->index = *n;
+            memcpy(o->platform, pname, sizeof o->platform);
+            clGetDeviceInfo(devs[d], CL_DEVICE_NAME, sizeof o->name - 1, o->name, NULL);
+            cl_device_type type = 0;
+            cl_uint cu = 0;
+            cl_ulong mem = 0;
+            char ext[8192] = {0};
+            clGetDeviceInfo(devs[d], CL_DEVICE_TYPE, sizeof type, &type, NULL);
+            clGetDeviceInfo(devs[d], CL_DEVICE_MAX_COMPUTE_UNITS, sizeof cu, &cu, NULL);
+            clGetDeviceInfo(devs[d], CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, NULL);
+            clGetDeviceInfo(devs[d], CL_DEVICE_EXTENSIONS, sizeof ext - 1, ext, NULL);
+            strcpy(o->type, (type & CL_DEVICE_TYPE_GPU)   ? "GPU"
+                            : (type & CL_DEVICE_TYPE_CPU) ? "CPU"
+                                                          : "other");
+            o->compute_units = (int)cu;
+            o->global_mem_bytes = (double)mem;
+            o->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
+        }
+    }
+    return PD_OK;
+}
+
 int pd_device_open(int index, pd_device **out, pd_error *err)
 {
     cl_platform_id plats[16];

@@ -143,6 +143,20 @@ int pd_overlap_host(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const
 
 typedef struct pd_device pd_device;
 
+/* One OpenCL device as pd_device_list reports it. */
+typedef struct pd_device_info {
+    int index; /* the N of --device N: devices of all platforms, in order */
+    char name[128];
+    char platform[128];
+    char type[8]; /* "GPU", "CPU" or "other" */
+    int compute_units;
+    double global_mem_bytes;
+    int fp64;
+} pd_device_info;
+
+/* Lists up to max devices into out; *n receives how many exist. */
+int pd_device_list(pd_device_info *out, int max, int *n, pd_error *err);
+
 /* Opens OpenCL device `index` over all platforms (-1: first GPU, else first device). */
 int pd_device_open(int index, pd_device **out, pd_error *err);
 void pd_device_close(pd_device *dev);

@@ -184,6 +184,13 @@ if near 1 "$(json_num "$tmp/m9" volume)" 1e-12 && [ "$(json_num "$tmp/m9" triang
     ok mesh_info
 else bad mesh_info "$(cat "$tmp/m9") $(cat "$tmp/m9b")"; fi
 
+# devices: at least the device the tests use, as text and as JSON
+if $POLYDEM devices >"$tmp/d1" && grep -q '^0: ' "$tmp/d1" && $POLYDEM devices --json >"$tmp/d2" &&
+    grep -q '^\[{"index": 0, "name": ' "$tmp/d2"; then
+    ok devices
+else bad devices "$(cat "$tmp/d1" "$tmp/d2")"; fi
+expect_fail devices_bad_flag 2 "--bogus" -- $POLYDEM devices --bogus
+
 # 10-18. bad input: exit 2 and a message naming what is wrong, nothing on stdout
 head -n 78 "$tmp/cube.stl" >"$tmp/open.stl" # 11 of the 12 facets: one hole
 echo "endsolid c" >>"$tmp/open.stl"
