@@ -1,0 +1,302 @@
+/*
+ * overlap_predicates.h - the geometric predicates of the polyhedral overlap (overlap.h): its
+ * input and state, the robust orientation tests of Algorithm 1 (edge through triangle, point
+ * against plane) and the point-in-solid test by ray parity. Compiles as OpenCL C and host C.
+ *
+ * Degenerate configurations (coplanar faces, a vertex on a face, an edge on an edge, coincident
+ * shapes) are resolved by simulation of simplicity: every predicate is evaluated for B displaced by
+ * eps * w with w = (1, d, d^2) and eps >> d infinitesimal, so each zero determinant takes the sign
+ * of its first non-zero symbolic term. Volume and centroid are continuous in the displacement, so
+ * the perturbed configuration's combinatorics evaluated at eps = 0 give the exact answer. The
+ * normal of eq. 4.19 is not continuous where faces of A and B are coplanar (which of the two owns
+ * the shared face flips with w), so when a degenerate predicate was met the pass is repeated with
+ * -w and the two normals are averaged: shared faces then cancel, as they must.
+ *
+ * A determinant within the configuration's rounding resolution (OVL_SNAP times the coordinate
+ * scale L to the power of its length dimension) is taken as exactly zero and resolved the same
+ * way: nearly coplanar or nearly coincident faces, which rounding of the pose produces, then
+ * behave like exactly coplanar ones instead of taking random signs from rounding noise. The
+ * bound is one absolute resolution for the whole configuration (features closer than about
+ * OVL_SNAP * L count as touching), not a per-determinant one: a determinant whose own factors are
+ * noise-sized would otherwise see the noise while its neighbours snap.
+ *
+ * Every predicate shared between neighbouring triangles (edge-edge orientation, ray-edge
+ * orientation, crossing points) is computed from the edge's canonical orientation (lower vertex
+ * index first), so the two triangles of an edge always agree bit for bit on what crosses where.
+ */
+#ifndef PD_OVERLAP_PREDICATES_H
+#define PD_OVERLAP_PREDICATES_H
+
+#include "pd_real.h"
+
+#define OVL_NO_FILTER 2 /* same value as PD_OVERLAP_NO_FILTER */
+/* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals. */
+#define OVL_TRI_CACHE 18
+
+/* Input of one overlap computation. Scratch sizes: see ovl_iscratch_len / ovl_rscratch_len. */
+typedef struct ovl_in {
+    PD_GLOBAL const pd_real *va; /* A's vertices, xyz, in A's frame */
+    PD_GLOBAL const int *ta;     /* A's triangles, outward counter-clockwise */
+    int nva, nta;
+    PD_GLOBAL const pd_real *vb; /* B's vertices in B's own frame */
+    PD_GLOBAL const int *tb;
+    int nvb, ntb;
+    /* optional vertex -> triangle tables (CSR: the triangles of vertex i are
+     * vt[vt_off[i] .. vt_off[i+1]-1]); with them the filter visits only the triangles of the
+     * vertices that reach into the other's half-plane; NULL: it classifies every triangle */
+    PD_GLOBAL const int *vt_a_off, *vt_a, *vt_b_off, *vt_b;
+    pd_real rot[9]; /* B's frame -> A's frame, row-major: p = rot * v + tr */
+    pd_real tr[3];
+    pd_v3 ca, cb;         /* centroids of A and B in A's frame (filter direction, eq. 5.3) */
+    pd_real vol_a, vol_b; /* mesh volumes; set the "no overlap" threshold */
+    int flags;
+    PD_GLOBAL int *iscr;     /* ovl_iscratch_len ints */
+    PD_GLOBAL pd_real *rscr; /* ovl_rscratch_len reals */
+    int pts_cap;             /* capacity for overlap nodes kept for the depth */
+} ovl_in;
+
+typedef struct ovl_out {
+    int hit;        /* overlap volume above round-off */
+    int degenerate; /* a zero predicate was resolved symbolically */
+    int kept_a;     /* triangles of A that survived the filters */
+    int kept_b;     /* triangles of B that survived the filters */
+    pd_real volume; /* V */
+    pd_v3 centroid; /* centre of mass of the overlap, A's frame */
+    pd_v3 normal;   /* unit, from A into B (eq. 4.19), A's frame */
+    pd_real depth;  /* extent of the overlap along normal */
+} ovl_out;
+
+PD_FN int ovl_iscratch_len(int nta, int ntb, int nva, int nvb)
+{
+    return 2 * (nta + ntb) + nva + nvb;
+}
+PD_FN int ovl_rscratch_len(int nva, int nvb, int ntb, int pts_cap)
+{
+    return nva + nvb + 3 * nvb + 3 * pts_cap + OVL_TRI_CACHE * ntb;
+}
+
+/* Vertex state bits (per pass). */
+#define OVL_V_READY 1  /* B only: transformed into A's frame */
+#define OVL_V_TESTED 2 /* inside test done in this pass */
+#define OVL_V_INSIDE 4 /* inside the other polyhedron */
+
+typedef struct ovl_ctx {
+    const ovl_in *in;
+    pd_v3 d; /* filter direction, eq. 5.3 */
+    pd_real e1, e2;
+    int filter;
+    int ka, kb; /* triangles kept by the half-plane filter: the ray casts' candidates */
+    int na, nb; /* of those, the ones meeting the box where A n B can lie: the pair loop's */
+    PD_GLOBAL int *kept_a, *kept_b, *near_a, *near_b, *st_a, *st_b;
+    pd_v3 box_lo, box_hi;     /* box of A's kept part n box of B's kept part, padded */
+    pd_v3 alo, ahi, blo, bhi; /* boxes of A's and B's kept parts, padded */
+    PD_GLOBAL pd_real *proj_a, *proj_b, *vbt, *pts, *ucache;
+    int npts, pts_overflow, store_pts;
+    pd_real pad;        /* OVL_SNAP * L: the configuration's length resolution */
+    pd_real tol2, tol3; /* snap bounds for determinants of length^2 and length^3 */
+    int flip;           /* 0: B displaced by +eps w, 1: by -eps w */
+    int degenerate;     /* a predicate was exactly zero */
+    /* cusp sums */
+    pd_real vol;
+    pd_v3 moment; /* first moment of volume */
+    pd_v3 area_a; /* sum of area * outward normal over A's faces inside B */
+    pd_v3 area_b; /* the same over B's faces inside A */
+    /* depth mode: project nodes on n instead of storing them */
+    int depth_mode;
+    pd_v3 n;
+    pd_real lo, hi;
+} ovl_ctx;
+
+/* Relative size below which a determinant is rounding noise: its inputs carry a few ulps from the
+ * pose transform and the determinant adds about ten more; 64 ulps leaves a margin. */
+#define OVL_SNAP (PD_R(64) * PD_EPS)
+
+PD_FN pd_real ovl_det(pd_v3 a, pd_v3 b, pd_v3 c)
+{
+    return v3_dot(a, v3_cross(b, c));
+}
+
+/*
+ * Sign of q0 + eps * (g . w) for w = (1, d, d^2): the sign of q0 when |q0| exceeds the snap bound
+ * tol (ovl_sign), else of the first non-zero component of g (ovl_tie; negated for the -w pass).
+ * Zero only when g vanishes, which the callers' geometry rules out (a parallel edge or ray, already
+ * rejected by a plane test). g is computed by the caller only inside the band.
+ */
+PD_FN int ovl_sign(pd_real q0, pd_real tol)
+{
+    return q0 > tol ? 1 : q0 < -tol ? -1 : 0;
+}
+
+PD_FN int ovl_tie(ovl_ctx *c, pd_v3 g)
+{
+    c->degenerate = 1;
+    /* components of g within rounding of its largest are zero too (near-aligned geometry) */
+    pd_real gt = OVL_SNAP * v3_amax(g);
+    int s = g.x > gt    ? 1
+            : g.x < -gt ? -1
+            : g.y > gt  ? 1
+            : g.y < -gt ? -1
+            : g.z > gt  ? 1
+            : g.z < -gt ? -1
+                        : 0;
+    return c->flip ? -s : s;
+}
+
+PD_FN pd_v3 ovl_va(const ovl_ctx *c, int i)
+{
+    return v3_load(c->in->va, i);
+}
+PD_FN pd_v3 ovl_vb(const ovl_ctx *c, int j)
+{
+    return v3_load(c->vbt, j);
+}
+
+/*
+ * Orientation of A's edge a0->a1 against B's edge b0->b1, both canonical (lower index first):
+ * sign of det(a1 - a0, b0 - a0, b1 - a0) with B displaced. The eps term is
+ * det(a1 - a0, w, b1 - b0) = w . ((b1 - b0) x (a1 - a0)).
+ */
+PD_FN int ovl_edge_edge(ovl_ctx *c, int ia0, int ia1, int ib0, int ib1)
+{
+    pd_v3 a0 = ovl_va(c, ia0), da = v3_sub(ovl_va(c, ia1), a0);
+    pd_v3 b0 = ovl_vb(c, ib0), b1 = ovl_vb(c, ib1);
+    int s = ovl_sign(ovl_det(da, v3_sub(b0, a0), v3_sub(b1, a0)), c->tol3);
+    return s ? s : ovl_tie(c, v3_cross(v3_sub(b1, b0), da));
+}
+
+/* Directed edge-edge orientation from canonical evaluation: A edge i->j against B edge k->l. */
+PD_FN int ovl_edge_edge_dir(ovl_ctx *c, int i, int j, int k, int l)
+{
+    int s = i < j ? 1 : -1;
+    if (k > l) s = -s;
+    return s * ovl_edge_edge(c, i < j ? i : j, i < j ? j : i, k < l ? k : l, k < l ? l : k);
+}
+
+/* Side of A's point p against B's triangle plane (u0, raw normal nu): eps term is -w . nu. */
+PD_FN int ovl_side_a(ovl_ctx *c, pd_v3 p, pd_v3 u0, pd_v3 nu, pd_real *q0)
+{
+    *q0 = v3_dot(v3_sub(p, u0), nu);
+    int s = ovl_sign(*q0, c->tol3);
+    return s ? s : ovl_tie(c, v3_scale(nu, PD_R(-1)));
+}
+
+/* Side of B's point u against A's triangle plane (t0, raw normal nt): eps term is +w . nt. */
+PD_FN int ovl_side_b(ovl_ctx *c, pd_v3 u, pd_v3 t0, pd_v3 nt, pd_real *q0)
+{
+    *q0 = v3_dot(v3_sub(u, t0), nt);
+    int s = ovl_sign(*q0, c->tol3);
+    return s ? s : ovl_tie(c, nt);
+}
+
+/*
+ * Box of the ray p + t r (t >= 0) up to where it leaves the box [lo, hi]: the kept triangles it
+ * can cross all lie inside [lo, hi], so a triangle whose box misses this one is not crossed.
+ */
+PD_FN void ovl_ray_box(pd_v3 p, pd_v3 r, pd_v3 lo, pd_v3 hi, pd_real pad, pd_v3 *rlo, pd_v3 *rhi)
+{
+    pd_real t = PD_REAL_MAX;
+    if (r.x != PD_R(0)) t = pd_min(t, ((r.x > 0 ? hi.x : lo.x) - p.x) / r.x);
+    if (r.y != PD_R(0)) t = pd_min(t, ((r.y > 0 ? hi.y : lo.y) - p.y) / r.y);
+    if (r.z != PD_R(0)) t = pd_min(t, ((r.z > 0 ? hi.z : lo.z) - p.z) / r.z);
+    t = pd_max(t, PD_R(0));
+    pd_v3 q = v3_add(p, v3_scale(r, t));
+    *rlo = v3(pd_min(p.x, q.x) - pad, pd_min(p.y, q.y) - pad, pd_min(p.z, q.z) - pad);
+    *rhi = v3(pd_max(p.x, q.x) + pad, pd_max(p.y, q.y) + pad, pd_max(p.z, q.z) + pad);
+}
+
+/* Whether triangle (u0, u1, u2) can meet the box [lo, hi]. */
+PD_FN int ovl_tri_meets(pd_v3 u0, pd_v3 u1, pd_v3 u2, pd_v3 lo, pd_v3 hi)
+{
+    return !(pd_max(pd_max(u0.x, u1.x), u2.x) < lo.x || pd_min(pd_min(u0.x, u1.x), u2.x) > hi.x ||
+             pd_max(pd_max(u0.y, u1.y), u2.y) < lo.y || pd_min(pd_min(u0.y, u1.y), u2.y) > hi.y ||
+             pd_max(pd_max(u0.z, u1.z), u2.z) < lo.z || pd_min(pd_min(u0.z, u1.z), u2.z) > hi.z);
+}
+
+PD_FN int ovl_in_box(const ovl_ctx *c, pd_v3 p)
+{
+    return p.x >= c->box_lo.x && p.x <= c->box_hi.x && p.y >= c->box_lo.y && p.y <= c->box_hi.y &&
+           p.z >= c->box_lo.z && p.z <= c->box_hi.z;
+}
+
+/* Point-in-B test for A's vertex i: parity of a ray cast along -d against B's kept triangles. */
+PD_FN int ovl_inside_b(ovl_ctx *c, int i)
+{
+    PD_GLOBAL const int *tb = c->in->tb;
+    pd_v3 p = ovl_va(c, i);
+    if (c->filter && c->proj_a[i] < c->e2) return 0; /* below B's half-plane: outside */
+    if (c->filter && !ovl_in_box(c, p)) return 0;    /* outside B's kept part's box */
+    pd_v3 r = v3_scale(c->d, PD_R(-1));
+    pd_v3 rlo, rhi;
+    ovl_ray_box(p, r, c->blo, c->bhi, c->pad, &rlo, &rhi);
+    int odd = 0;
+    for (int k = 0; k < c->kb; k++) {
+        int u = c->kept_b[k];
+        int i0 = tb[3 * u], i1 = tb[3 * u + 1], i2 = tb[3 * u + 2];
+        pd_v3 u0 = ovl_vb(c, i0), u1 = ovl_vb(c, i1), u2 = ovl_vb(c, i2);
+        if (c->filter && !ovl_tri_meets(u0, u1, u2, rlo, rhi)) continue;
+        pd_v3 nu = v3_cross(v3_sub(u1, u0), v3_sub(u2, u0));
+        pd_real rn = v3_dot(r, nu);
+        /* a ray parallel to the plane, to within rounding, never crosses it (exactly parallel
+         * it would cross only if it lay in the plane, which the perturbation rules out) */
+        if (PD_FABS(rn) <= c->tol2) continue;
+        pd_real q0;
+        int s = ovl_side_a(c, p, u0, nu, &q0);
+        if ((s > 0) != (rn < PD_R(0))) continue; /* plane behind the ray's start */
+        int idx[3] = {i0, i1, i2};
+        int sg[3] = {0, 0, 0};
+        for (int e = 0; e < 3; e++) {
+            if (e > 0 && sg[e - 1] != sg[0]) break; /* turns differ: the ray misses */
+            int k0 = idx[e], k1 = idx[(e + 1) % 3];
+            int lo = k0 < k1 ? k0 : k1, hi = k0 < k1 ? k1 : k0;
+            pd_v3 b0 = ovl_vb(c, lo), b1 = ovl_vb(c, hi);
+            /* det(r, b0 - q, b1 - q) for q = p - eps w: eps term w . ((b1 - b0) x r) */
+            int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), v3_sub(b1, p)), c->tol2);
+            if (!sv) sv = ovl_tie(c, v3_cross(v3_sub(b1, b0), r));
+            sg[e] = k0 < k1 ? sv : -sv;
+        }
+        if (sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2]) odd ^= 1;
+    }
+    return odd;
+}
+
+/* Point-in-A test for B's vertex j: ray along +d against A's kept triangles. */
+PD_FN int ovl_inside_a(ovl_ctx *c, int j)
+{
+    PD_GLOBAL const int *ta = c->in->ta;
+    pd_v3 u = ovl_vb(c, j);
+    if (c->filter && c->proj_b[j] > c->e1) return 0; /* above A's half-plane: outside */
+    if (c->filter && !ovl_in_box(c, u)) return 0;
+
+    pd_v3 r = c->d;
+    pd_v3 rlo, rhi;
+    ovl_ray_box(u, r, c->alo, c->ahi, c->pad, &rlo, &rhi);
+    int odd = 0;
+    for (int k = 0; k < c->ka; k++) {
+        int t = c->kept_a[k];
+        int i0 = ta[3 * t], i1 = ta[3 * t + 1], i2 = ta[3 * t + 2];
+        pd_v3 t0 = ovl_va(c, i0), t1 = ovl_va(c, i1), t2 = ovl_va(c, i2);
+        if (c->filter && !ovl_tri_meets(t0, t1, t2, rlo, rhi)) continue;
+        pd_v3 nt = v3_cross(v3_sub(t1, t0), v3_sub(t2, t0));
+        pd_real rn = v3_dot(r, nt);
+        if (PD_FABS(rn) <= c->tol2) continue; /* parallel */
+        pd_real q0;
+        int s = ovl_side_b(c, u, t0, nt, &q0);
+        if ((s > 0) != (rn < PD_R(0))) continue;
+        int idx[3] = {i0, i1, i2};
+        int sg[3] = {0, 0, 0};
+        for (int e = 0; e < 3; e++) {
+            if (e > 0 && sg[e - 1] != sg[0]) break;
+            int k0 = idx[e], k1 = idx[(e + 1) % 3];
+            int lo = k0 < k1 ? k0 : k1, hi = k0 < k1 ? k1 : k0;
+            pd_v3 a0 = ovl_va(c, lo), a1 = ovl_va(c, hi);
+            /* det(r, a0 - q, a1 - q) for q = u + eps w: eps term -w . ((a1 - a0) x r) */
+            int sv = ovl_sign(ovl_det(r, v3_sub(a0, u), v3_sub(a1, u)), c->tol2);
+            if (!sv) sv = ovl_tie(c, v3_scale(v3_cross(v3_sub(a1, a0), r), PD_R(-1)));
+            sg[e] = k0 < k1 ? sv : -sv;
+        }
+        if (sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2]) odd ^= 1;
+    }
+    return odd;
+}
+
+#endif /* PD_OVERLAP_PREDICATES_H */
