@@ -14,8 +14,9 @@ endif
 # round the same operations the same way (the overlap paths must agree to 1e-12).
 CFLAGS ?= -O2 -g
 CFLAGS += -std=c11 -D_POSIX_C_SOURCE=200809L -Wall -Wextra -Werror -ffp-contract=off \
-          -Iengine -Ikernels -I$(BUILD)/gen $(SANFLAGS)
-LDLIBS := -lOpenCL -lm
+          -Iengine -Ikernels -I$(BUILD)/gen -I/usr/include/hdf5/serial $(SANFLAGS)
+# Debian's serial HDF5 lives under hdf5/serial
+LDLIBS := -lOpenCL -ljansson -lhdf5_serial -lm
 LDFLAGS += $(SANFLAGS)
 
 ENGINE_SRC := $(wildcard engine/*.c)
@@ -34,7 +35,7 @@ BENCH_BIN := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 all: $(BUILD)/polydem
 
 DEB_PACKAGES := build-essential ocl-icd-opencl-dev opencl-c-headers pocl-opencl-icd clinfo \
-                clang-format
+                clang-format libjansson-dev libhdf5-dev hdf5-tools
 deps:
 	@sh tools/install_deps.sh $(DEB_PACKAGES)
 
