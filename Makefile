@@ -35,7 +35,7 @@ BENCH_BIN := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 all: $(BUILD)/polydem
 
 DEB_PACKAGES := build-essential ocl-icd-opencl-dev opencl-c-headers pocl-opencl-icd clinfo \
-                clang-format libjansson-dev libhdf5-dev hdf5-tools
+                clang-format libjansson-dev libhdf5-dev hdf5-tools python3-jsonschema
 deps:
 	@sh tools/install_deps.sh $(DEB_PACKAGES)
 

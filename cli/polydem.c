@@ -4,6 +4,7 @@
  *   polydem overlap A B --pose-a "x y z qw qx qy qz" --pose-b "..." [--opencl] [--single]
  *                       [--no-filter] [--device N]
  *   polydem mesh-info FILE|builtin:NAME[:TRIANGLES[:SEED]]
+ *   polydem validate SCENARIO.json [--json]
  *   polydem devices [--json]
  *
  * Output is one JSON object on stdout, SI units, full double precision. Bad arguments or meshes
@@ -32,6 +33,9 @@ static const char *usage_text =
     "      triangles, vertices, volume, centroid, inertia and principal moments\n"
     "      (inertia per unit density, m^5 = kg m^2 at 1 kg/m^3)\n"
     "\n"
+    "  validate SCENARIO.json [--json]\n"
+    "      checks a scenario: every error with its JSON path (exit 1), or the particle count,\n"
+    "      memory estimate and stable time step\n"
     "  devices [--json]\n"
     "      the OpenCL devices; N is what --device N takes\n"
     "\n"
@@ -199,6 +203,95 @@ static int cmd_mesh_info(int argc, char **argv)
     return 0;
 }
 
+/* Writes s as a JSON string literal (quotes and control characters escaped). */
+static void json_str(const char *s)
+{
+    putchar('"');
+    for (; *s; s++) {
+        if (*s == '"' || *s == '\\')
+            printf("\\%c", *s);
+        else if ((unsigned char)*s < 0x20)
+            printf("\\u%04x", *s);
+        else
+            putchar(*s);
+    }
+    putchar('"');
+}
+
+static int cmd_validate(int argc, char **argv)
+{
+    const char *file = NULL;
+    int json = 0;
+    for (int i = 2; i < argc; i++) {
+        if (!strcmp(argv[i], "--json"))
+            json = 1;
+        else if (argv[i][0] == '-' && argv[i][1])
+            return fail("validate: unknown option \"%s\"%s", argv[i], "");
+        else if (!file)
+            file = argv[i];
+        else
+            return fail("validate: one scenario file expected, got \"%s\" too%s", argv[i], "");
+    }
+    if (!file) return fail("validate: a scenario file is required%s%s", "", "");
+    pd_scenario *sc = NULL;
+    pd_diags d = {0, 0, NULL};
+    pd_error err = {0};
+    int rc = pd_scenario_load(file, &sc, &d, &err);
+    if (rc != PD_OK) {
+        if (json) {
+            printf("{\"valid\": false, \"errors\": [");
+            if (d.n == 0) {
+                printf("{\"path\": \"\", \"message\": ");
+                json_str(err.msg);
+                printf("}");
+            }
+            for (int i = 0; i < d.n; i++) {
+                printf("%s{\"path\": ", i ? ", " : "");
+                json_str(d.items[i].path);
+                printf(", \"message\": ");
+                json_str(d.items[i].msg);
+                printf("}");
+            }
+            printf("]}\n");
+        } else if (d.n == 0) {
+            fprintf(stderr, "polydem: %s\n", err.msg);
+        } else {
+            for (int i = 0; i < d.n; i++)
+                fprintf(stderr, "%s: %s: %s\n", file, d.items[i].path, d.items[i].msg);
+            fprintf(stderr, "%s: %d error%s\n", file, d.n, d.n == 1 ? "" : "s");
+        }
+        pd_diags_free(&d);
+        return 1;
+    }
+    pd_scenario_summary m;
+    pd_scenario_summarize(sc, &m);
+    if (json) {
+        printf("{\"valid\": true, \"particles\": %ld, \"shapes\": %d, \"materials\": %d, "
+               "\"walls\": %d, \"dt_s\": %.17g, \"duration_s\": %.17g, \"steps\": %ld, "
+               "\"dt_stable_s\": %.17g, \"dt_rayleigh_s\": %.17g, \"hertz_contact_time_s\": "
+               "%.17g, \"memory_bytes\": %.0f}\n",
+               m.particles, m.shapes, m.materials, m.walls, m.dt, m.duration, m.steps, m.dt_stable,
+               m.dt_rayleigh, isfinite(m.dt_hertz) ? m.dt_hertz : -1, m.memory_bytes);
+    } else {
+        printf("%s: valid\n", file);
+        printf("  particles: %ld (%d shapes, %d materials, %d walls)\n", m.particles, m.shapes,
+               m.materials, m.walls);
+        printf("  time: dt %g s, duration %g s, %ld steps\n", m.dt, m.duration, m.steps);
+        printf("  stable dt estimate: %.3g s (0.3 x Rayleigh time %.3g s", m.dt_stable,
+               m.dt_rayleigh);
+        if (isfinite(m.dt_hertz))
+            printf("; Hertz contact time %.3g s / 20)\n", m.dt_hertz);
+        else
+            printf("; no contact speed)\n");
+        if (m.memory_bytes < 1048576)
+            printf("  memory estimate: %.1f KiB\n", m.memory_bytes / 1024.0);
+        else
+            printf("  memory estimate: %.1f MiB\n", m.memory_bytes / 1048576.0);
+    }
+    pd_scenario_destroy(sc);
+    return 0;
+}
+
 static int cmd_devices(int argc, char **argv)
 {
     int json = argc == 3 && !strcmp(argv[2], "--json");
@@ -242,6 +335,7 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "overlap")) return cmd_overlap(argc, argv);
     if (!strcmp(argv[1], "mesh-info")) return cmd_mesh_info(argc, argv);
     if (!strcmp(argv[1], "devices")) return cmd_devices(argc, argv);
+    if (!strcmp(argv[1], "validate")) return cmd_validate(argc, argv);
     fprintf(stderr, "polydem: unknown command \"%s\"\n\n%s", argv[1], usage_text);
     return EXIT_USAGE;
 }

@@ -139,6 +139,52 @@ typedef struct pd_contact {
 int pd_overlap_host(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const pd_pose *pb,
                     int flags, pd_contact *out, pd_error *err);
 
+/* ---- scenarios (engine/scenario*.c; contract: schemas/scenario.schema.json) -------------------
+ */
+
+typedef struct pd_scenario pd_scenario;
+
+/* One problem in a scenario: where (a JSON pointer, e.g. "/particles/0/size/std") and what. */
+typedef struct pd_diag {
+    char path[160];
+    char msg[352];
+} pd_diag;
+
+/* Every problem found in a scenario, in document order. */
+typedef struct pd_diags {
+    int n, cap;
+    pd_diag *items;
+} pd_diags;
+
+void pd_diags_free(pd_diags *d);
+
+/*
+ * Parses and validates a scenario given as JSON text; relative mesh paths resolve against
+ * base_dir (NULL: the current directory). On PD_EINVAL diags lists every problem (err holds the
+ * first); other codes are I/O or memory failures in err. *out is NULL unless PD_OK.
+ */
+int pd_scenario_parse(const char *json_text, const char *base_dir, pd_scenario **out,
+                      pd_diags *diags, pd_error *err);
+
+/* Reads a scenario file and parses it; meshes resolve against the file's directory. */
+int pd_scenario_load(const char *path, pd_scenario **out, pd_diags *diags, pd_error *err);
+
+void pd_scenario_destroy(pd_scenario *s);
+
+/* What a scenario amounts to, for `polydem validate` and POST /v1/scenarios/validate. */
+typedef struct pd_scenario_summary {
+    long particles;
+    int shapes, materials, walls;
+    double dt, duration; /* s */
+    long steps;
+    double dt_rayleigh;  /* Rayleigh time step of the smallest particle, s */
+    double dt_hertz;     /* shortest Hertz contact time at the scenario's speeds, s */
+    double dt_stable;    /* min(0.3 dt_rayleigh, dt_hertz / 20), s */
+    double memory_bytes; /* device memory estimate, bytes */
+} pd_scenario_summary;
+
+void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out);
+
 /* ---- OpenCL devices (engine/cl_device.c) ---------------------------------------------------- */
 
 typedef struct pd_device pd_device;

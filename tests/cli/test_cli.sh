@@ -191,6 +191,33 @@ if $POLYDEM devices >"$tmp/d1" && grep -q '^0: ' "$tmp/d1" && $POLYDEM devices -
 else bad devices "$(cat "$tmp/d1" "$tmp/d2")"; fi
 expect_fail devices_bad_flag 2 "--bogus" -- $POLYDEM devices --bogus
 
+# validate: a valid scenario prints its summary with units, exit 0
+if $POLYDEM validate examples/collision.json >"$tmp/v1" 2>&1 && grep -q "valid" "$tmp/v1" &&
+    grep -q "particles: 2 " "$tmp/v1" && grep -Eq "stable dt estimate: [0-9.e+-]+ s" "$tmp/v1"; then
+    ok validate_valid
+else bad validate_valid "$(cat "$tmp/v1")"; fi
+# every error with its JSON path, exit 1
+sed -e 's/"density": 2600/"density": -2600/' -e 's/"friction": 0.35/"frction": 0.35/' \
+    examples/collision.json >"$tmp/bad.json"
+$POLYDEM validate "$tmp/bad.json" >"$tmp/v2" 2>&1
+rc=$?
+if [ "$rc" -eq 1 ] && grep -q "/materials/rock/density: must be > 0" "$tmp/v2" &&
+    grep -q "/interactions/0/frction: unknown field" "$tmp/v2" && grep -q "2 errors" "$tmp/v2"; then
+    ok validate_reports_every_error
+else bad validate_reports_every_error "exit $rc: $(cat "$tmp/v2")"; fi
+$POLYDEM validate "$tmp/bad.json" --json >"$tmp/v3"
+if grep -q '"valid": false' "$tmp/v3" && grep -q '"path": "/materials/rock/density"' "$tmp/v3"; then
+    ok validate_json_errors
+else bad validate_json_errors "$(cat "$tmp/v3")"; fi
+$POLYDEM validate examples/collision.json --json >"$tmp/v4"
+if grep -q '"valid": true' "$tmp/v4" && near 2 "$(json_num "$tmp/v4" particles)" 0; then
+    ok validate_json_summary
+else bad validate_json_summary "$(cat "$tmp/v4")"; fi
+$POLYDEM validate "$tmp/none.json" >"$tmp/v5" 2>&1
+rc=$?
+if [ "$rc" -eq 1 ] && grep -q "none.json: cannot open" "$tmp/v5"; then ok validate_missing_file
+else bad validate_missing_file "exit $rc: $(cat "$tmp/v5")"; fi
+
 # 10-18. bad input: exit 2 and a message naming what is wrong, nothing on stdout
 head -n 78 "$tmp/cube.stl" >"$tmp/open.stl" # 11 of the 12 facets: one hole
 echo "endsolid c" >>"$tmp/open.stl"

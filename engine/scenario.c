@@ -1,0 +1,1043 @@
+/*
+ * scenario.c - parsing and validating a scenario (the contract: schemas/scenario.schema.json;
+ * every field, unit and default: docs/SCENARIO.md).
+ *
+ * Parsing is strict: unknown fields are errors (a misspelt "frction" must not silently become the
+ * default), and every problem is collected with its JSON pointer rather than stopping at the
+ * first, so a user fixes a scenario in one round.
+ */
+#include <errno.h>
+#include <jansson.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scenario.h"
+
+static const double PI = 3.14159265358979323846;
+
+typedef struct sc_parse {
+    pd_scenario *s;
+    pd_diags *d;
+    const char *base_dir;
+    int failed;
+} sc_parse;
+
+void pd_diags_free(pd_diags *d)
+{
+    if (!d) return;
+    free(d->items);
+    d->items = NULL;
+    d->n = d->cap = 0;
+}
+
+/* snprintf for labels and paths, where truncation is harmless (they only name things). */
+static void put(char *out, size_t n, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+static void put(char *out, size_t n, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(out, n, fmt, ap);
+    va_end(ap);
+}
+
+/* Records one problem at a JSON pointer. */
+static void diag(sc_parse *p, const char *at, const char *fmt, ...)
+    __attribute__((format(printf, 3, 4)));
+static void diag(sc_parse *p, const char *at, const char *fmt, ...)
+{
+    p->failed = 1;
+    pd_diags *d = p->d;
+    if (!d) return;
+    if (d->n == d->cap) {
+        int cap = d->cap ? 2 * d->cap : 16;
+        pd_diag *it = realloc(d->items, sizeof *it * (size_t)cap);
+        if (!it) return; /* out of memory: the failure is still recorded in p->failed */
+        d->items = it;
+        d->cap = cap;
+    }
+    pd_diag *g = &d->items[d->n++];
+    put(g->path, sizeof g->path, "%s", at[0] ? at : "/");
+    va_list ap;
+    va_start(ap, fmt);
+    vsnprintf(g->msg, sizeof g->msg, fmt, ap);
+    va_end(ap);
+}
+
+/* Child pointer: at + "/" + key (JSON pointer escaping of '~' and '/' in keys). */
+static void child(char *out, size_t n, const char *at, const char *key)
+{
+    size_t k = (size_t)snprintf(out, n, "%s/", at);
+    for (const char *c = key; *c && k + 3 < n; c++) {
+        if (*c == '~' || *c == '/') {
+            out[k++] = '~';
+            out[k++] = *c == '~' ? '0' : '1';
+        } else {
+            out[k++] = *c;
+        }
+    }
+    out[k < n ? k : n - 1] = 0;
+}
+
+static void child_i(char *out, size_t n, const char *at, size_t i)
+{
+    put(out, n, "%s/%zu", at, i);
+}
+
+/* Unknown keys of an object are errors; allowed is NULL-terminated. */
+static void only(sc_parse *p, json_t *o, const char *at, const char *const *allowed)
+{
+    const char *key;
+    json_t *v;
+    json_object_foreach(o, key, v)
+    {
+        int ok = 0;
+        for (const char *const *a = allowed; *a && !ok; a++)
+            ok = !strcmp(*a, key);
+        if (!ok) {
+            char c[160];
+            child(c, sizeof c, at, key);
+            diag(p, c, "unknown field");
+        }
+    }
+}
+
+enum { ANY = 0, POSITIVE = 1, NONNEG = 2 };
+
+/* A number field; absent: def (an error when required). */
+static double num(sc_parse *p, json_t *o, const char *at, const char *key, int required, double def,
+                  int rule, const char *unit)
+{
+    char c[160];
+    child(c, sizeof c, at, key);
+    json_t *v = json_object_get(o, key);
+    if (!v) {
+        if (required) diag(p, c, "required%s%s", unit[0] ? ", in " : "", unit);
+        return def;
+    }
+    if (!json_is_number(v)) {
+        diag(p, c, "must be a number%s%s", unit[0] ? " in " : "", unit);
+        return def;
+    }
+    double x = json_number_value(v);
+    if (!isfinite(x)) {
+        diag(p, c, "must be finite");
+        return def;
+    }
+    if (rule == POSITIVE && !(x > 0)) {
+        diag(p, c, "must be > 0, got %g", x);
+        return def;
+    }
+    if (rule == NONNEG && !(x >= 0)) {
+        diag(p, c, "must be >= 0, got %g", x);
+        return def;
+    }
+    return x;
+}
+
+/* A fixed-length numeric array field; absent: def (when def is NULL the field is required). */
+static int numvec(sc_parse *p, json_t *o, const char *at, const char *key, int n, const double *def,
+                  double *out)
+{
+    char c[160];
+    child(c, sizeof c, at, key);
+    json_t *v = json_object_get(o, key);
+    if (!v) {
+        if (!def) {
+            diag(p, c, "required: an array of %d numbers", n);
+            return 0;
+        }
+        memcpy(out, def, sizeof(double) * (size_t)n);
+        return 1;
+    }
+    if (!json_is_array(v) || (int)json_array_size(v) != n) {
+        diag(p, c, "must be an array of %d numbers", n);
+        return 0;
+    }
+    for (int i = 0; i < n; i++) {
+        json_t *x = json_array_get(v, (size_t)i);
+        if (!json_is_number(x) || !isfinite(json_number_value(x))) {
+            char ci[160];
+            child_i(ci, sizeof ci, c, (size_t)i);
+            diag(p, ci, "must be a finite number");
+            return 0;
+        }
+        out[i] = json_number_value(x);
+    }
+    return 1;
+}
+
+/* A string field, or NULL (an error when required). */
+static const char *str(sc_parse *p, json_t *o, const char *at, const char *key, int required)
+{
+    char c[160];
+    child(c, sizeof c, at, key);
+    json_t *v = json_object_get(o, key);
+    if (!v) {
+        if (required) diag(p, c, "required: a string");
+        return NULL;
+    }
+    if (!json_is_string(v)) {
+        diag(p, c, "must be a string");
+        return NULL;
+    }
+    return json_string_value(v);
+}
+
+/* An object member that must be a JSON object when present. */
+static json_t *obj(sc_parse *p, json_t *o, const char *at, const char *key, int required)
+{
+    char c[160];
+    child(c, sizeof c, at, key);
+    json_t *v = json_object_get(o, key);
+    if (!v) {
+        if (required) diag(p, c, "required: an object");
+        return NULL;
+    }
+    if (!json_is_object(v)) {
+        diag(p, c, "must be an object");
+        return NULL;
+    }
+    return v;
+}
+
+static int find_material(const pd_scenario *s, const char *name)
+{
+    for (int i = 0; i < s->nmat; i++)
+        if (!strcmp(s->mat[i].name, name)) return i;
+    return -1;
+}
+
+static int find_shape(const pd_scenario *s, const char *name)
+{
+    for (int i = 0; i < s->nshape; i++)
+        if (!strcmp(s->shape[i].name, name)) return i;
+    return -1;
+}
+
+const sc_interaction *sc_interaction_of(const pd_scenario *s, int a, int b)
+{
+    for (int i = 0; i < s->nint; i++) {
+        const sc_interaction *x = &s->inter[i];
+        if ((x->mat[0] == a && x->mat[1] == b) || (x->mat[0] == b && x->mat[1] == a)) return x;
+    }
+    return NULL;
+}
+
+/* A material reference: the index, or -1 after a diagnostic. */
+static int material_ref(sc_parse *p, json_t *o, const char *at, const char *key)
+{
+    const char *name = str(p, o, at, key, 1);
+    if (!name) return -1;
+    int m = find_material(p->s, name);
+    if (m < 0) {
+        char c[160];
+        child(c, sizeof c, at, key);
+        diag(p, c, "no material named '%s' in /materials", name);
+    }
+    return m;
+}
+
+static void copy_name(char *dst, const char *src, sc_parse *p, const char *at)
+{
+    if (strlen(src) >= SC_NAME_MAX) diag(p, at, "name longer than %d characters", SC_NAME_MAX - 1);
+    put(dst, SC_NAME_MAX, "%s", src);
+}
+
+static void parse_time(sc_parse *p, json_t *root)
+{
+    static const char *const keys[] = {"dt", "duration", "output_interval", "stats_interval", NULL};
+    pd_scenario *s = p->s;
+    json_t *t = obj(p, root, "", "time", 1);
+    if (!t) return;
+    only(p, t, "/time", keys);
+    s->dt = num(p, t, "/time", "dt", 1, 1e-5, POSITIVE, "s");
+    s->duration = num(p, t, "/time", "duration", 1, 1, POSITIVE, "s");
+    /* defaults: 100 frames and 10 stats rows per frame, never finer than one step */
+    double out_def = s->duration / 100 > s->dt ? s->duration / 100 : s->dt;
+    s->output_interval = num(p, t, "/time", "output_interval", 0, out_def, POSITIVE, "s");
+    double stats_def = s->output_interval / 10 > s->dt ? s->output_interval / 10 : s->dt;
+    s->stats_interval = num(p, t, "/time", "stats_interval", 0, stats_def, POSITIVE, "s");
+    if (s->output_interval < s->dt)
+        diag(p, "/time/output_interval", "%g s is shorter than dt (%g s)", s->output_interval,
+             s->dt);
+    if (s->stats_interval < s->dt)
+        diag(p, "/time/stats_interval", "%g s is shorter than dt (%g s)", s->stats_interval, s->dt);
+    if (s->duration / s->dt > 1e12)
+        diag(p, "/time/duration", "%g s at dt %g s is more than 1e12 steps", s->duration, s->dt);
+}
+
+static void parse_materials(sc_parse *p, json_t *root)
+{
+    static const char *const keys[] = {"density", "youngs_modulus", "poisson_ratio",
+                                       "shear_modulus", NULL};
+    pd_scenario *s = p->s;
+    json_t *m = obj(p, root, "", "materials", 1);
+    if (!m) return;
+    if (json_object_size(m) == 0) diag(p, "/materials", "at least one material is required");
+    s->mat = calloc(json_object_size(m) + 1, sizeof *s->mat);
+    if (!s->mat) return;
+    const char *name;
+    json_t *v;
+    json_object_foreach(m, name, v)
+    {
+        char at[160];
+        child(at, sizeof at, "/materials", name);
+        if (!json_is_object(v)) {
+            diag(p, at, "must be an object");
+            continue;
+        }
+        only(p, v, at, keys);
+        sc_material *x = &s->mat[s->nmat++];
+        copy_name(x->name, name, p, at);
+        x->density = num(p, v, at, "density", 1, 1000, POSITIVE, "kg/m^3");
+        x->youngs_modulus = num(p, v, at, "youngs_modulus", 1, 1e7, POSITIVE, "Pa");
+        x->poisson_ratio = num(p, v, at, "poisson_ratio", 0, 0.25, ANY, "");
+        if (!(x->poisson_ratio > -1 && x->poisson_ratio < 0.5)) {
+            char c[160];
+            child(c, sizeof c, at, "poisson_ratio");
+            diag(p, c, "must lie in (-1, 0.5), got %g", x->poisson_ratio);
+            x->poisson_ratio = 0.25;
+        }
+        x->shear_modulus = num(p, v, at, "shear_modulus", 0,
+                               x->youngs_modulus / (2 * (1 + x->poisson_ratio)), POSITIVE, "Pa");
+    }
+}
+
+static void parse_interactions(sc_parse *p, json_t *root)
+{
+    static const char *const keys[] = {"between",
+                                       "friction",
+                                       "damping",
+                                       "model",
+                                       "cohesion",
+                                       "normal_stiffness",
+                                       "tangential_stiffness",
+                                       "damping_coefficient",
+                                       NULL};
+    pd_scenario *s = p->s;
+    json_t *a = json_object_get(root, "interactions");
+    if (!a) return; /* missing pairs are reported where materials are used */
+    if (!json_is_array(a)) {
+        diag(p, "/interactions", "must be an array");
+        return;
+    }
+    s->inter = calloc(json_array_size(a) + 1, sizeof *s->inter);
+    if (!s->inter) return;
+    size_t i;
+    json_t *v;
+    json_array_foreach(a, i, v)
+    {
+        char at[160], c[160];
+        child_i(at, sizeof at, "/interactions", i);
+        if (!json_is_object(v)) {
+            diag(p, at, "must be an object");
+            continue;
+        }
+        only(p, v, at, keys);
+        sc_interaction x;
+        memset(&x, 0, sizeof x);
+        json_t *b = json_object_get(v, "between");
+        child(c, sizeof c, at, "between");
+        if (!json_is_array(b) || json_array_size(b) != 2 || !json_is_string(json_array_get(b, 0)) ||
+            !json_is_string(json_array_get(b, 1))) {
+            diag(p, c, "required: two material names");
+            continue;
+        }
+        int ok = 1;
+        for (int k = 0; k < 2; k++) {
+            const char *mn = json_string_value(json_array_get(b, (size_t)k));
+            x.mat[k] = find_material(s, mn);
+            if (x.mat[k] < 0) {
+                char ck[160];
+                child_i(ck, sizeof ck, c, (size_t)k);
+                diag(p, ck, "no material named '%s' in /materials", mn);
+                ok = 0;
+            }
+        }
+        const char *model = str(p, v, at, "model", 0);
+        x.model = SC_MODEL_HERTZ_MINDLIN;
+        if (model && !strcmp(model, "linear"))
+            x.model = SC_MODEL_LINEAR;
+        else if (model && strcmp(model, "hertz_mindlin")) {
+            child(c, sizeof c, at, "model");
+            diag(p, c, "must be \"hertz_mindlin\" or \"linear\", got \"%s\"", model);
+        }
+        x.friction = num(p, v, at, "friction", 0, 0.5, NONNEG, "");
+        x.damping = num(p, v, at, "damping", 0, 0, NONNEG, "");
+        x.cohesion = num(p, v, at, "cohesion", 0, 0, NONNEG, "N/m");
+        if (x.model == SC_MODEL_LINEAR) {
+            x.normal_stiffness = num(p, v, at, "normal_stiffness", 1, 1e4, POSITIVE, "N/m");
+            x.tangential_stiffness = num(p, v, at, "tangential_stiffness", 0,
+                                         2.0 / 7.0 * x.normal_stiffness, NONNEG, "N/m");
+            x.damping_coefficient = num(p, v, at, "damping_coefficient", 0, 0, NONNEG, "N s/m");
+        } else {
+            static const char *const lin[] = {"normal_stiffness", "tangential_stiffness",
+                                              "damping_coefficient"};
+            for (int k = 0; k < 3; k++)
+                if (json_object_get(v, lin[k])) {
+                    child(c, sizeof c, at, lin[k]);
+                    diag(p, c, "only for \"model\": \"linear\"");
+                }
+        }
+        if (!ok) continue;
+        if (sc_interaction_of(s, x.mat[0], x.mat[1])) {
+            diag(p, at, "a second interaction between '%s' and '%s'", s->mat[x.mat[0]].name,
+                 s->mat[x.mat[1]].name);
+            continue;
+        }
+        s->inter[s->nint++] = x;
+    }
+}
+
+/* Loads the mesh of one shape object (not a sphere); NULL after a diagnostic. */
+static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
+{
+    pd_error err = {0};
+    pd_mesh *m = NULL;
+    char c[160];
+    const char *builtin = str(p, v, at, "builtin", 0);
+    const char *file = str(p, v, at, "mesh", 0);
+    json_t *verts = json_object_get(v, "vertices");
+    int kinds = (builtin != NULL) + (file != NULL) + (verts != NULL);
+    if (kinds != 1) {
+        diag(p, at, "needs exactly one of \"builtin\", \"mesh\", \"vertices\" or \"sphere\"");
+        return NULL;
+    }
+    if (builtin) {
+        double tri = num(p, v, at, "triangles", 0, 0, POSITIVE, "");
+        double seed = num(p, v, at, "seed", 0, 1, NONNEG, "");
+        if (pd_mesh_builtin(builtin, (int)tri, (unsigned)seed, &m, &err) != PD_OK) {
+            child(c, sizeof c, at, "builtin");
+            diag(p, c, "%s", err.msg);
+        }
+    } else if (file) {
+        char path[4096];
+        if (file[0] == '/' || !p->base_dir)
+            put(path, sizeof path, "%s", file);
+        else
+            put(path, sizeof path, "%s/%s", p->base_dir, file);
+        if (pd_mesh_load(path, &m, &err) != PD_OK) {
+            child(c, sizeof c, at, "mesh");
+            diag(p, c, "%s", err.msg);
+        }
+    } else {
+        json_t *tris = json_object_get(v, "triangles");
+        size_t nv = json_is_array(verts) ? json_array_size(verts) : 0;
+        size_t nt = json_is_array(tris) ? json_array_size(tris) : 0;
+        if (!nv || !nt) {
+            diag(p, at, "\"vertices\" and \"triangles\" must be non-empty arrays");
+            return NULL;
+        }
+        double *vx = malloc(sizeof(double) * 3 * nv);
+        int *tx = malloc(sizeof(int) * 3 * nt);
+        int bad = !vx || !tx;
+        for (size_t i = 0; i < nv && !bad; i++) {
+            json_t *r = json_array_get(verts, i);
+            for (int k = 0; k < 3 && !bad; k++) {
+                json_t *x = json_array_get(r, (size_t)k);
+                if (!json_is_array(r) || json_array_size(r) != 3 || !json_is_number(x)) {
+                    put(c, sizeof c, "%s/vertices/%zu", at, i);
+                    diag(p, c, "must be [x, y, z] in m");
+                    bad = 1;
+                } else {
+                    vx[3 * i + k] = json_number_value(x);
+                }
+            }
+        }
+        for (size_t i = 0; i < nt && !bad; i++) {
+            json_t *r = json_array_get(tris, i);
+            for (int k = 0; k < 3 && !bad; k++) {
+                json_t *x = json_array_get(r, (size_t)k);
+                if (!json_is_array(r) || json_array_size(r) != 3 || !json_is_integer(x)) {
+                    put(c, sizeof c, "%s/triangles/%zu", at, i);
+                    diag(p, c, "must be [i, j, k] vertex indices");
+                    bad = 1;
+                } else {
+                    tx[3 * i + k] = (int)json_integer_value(x);
+                }
+            }
+        }
+        if (!bad && pd_mesh_from_arrays(vx, (int)nv, tx, (int)nt, at, &m, &err) != PD_OK)
+            diag(p, at, "%s", err.msg);
+        free(vx);
+        free(tx);
+    }
+    return m;
+}
+
+static void parse_shapes(sc_parse *p, json_t *root)
+{
+    static const char *const keys[] = {"builtin",  "triangles", "seed", "mesh",
+                                       "vertices", "sphere",    NULL};
+    pd_scenario *s = p->s;
+    json_t *o = obj(p, root, "", "shapes", 1);
+    if (!o) return;
+    s->shape = calloc(json_object_size(o) + 1, sizeof *s->shape);
+    if (!s->shape) return;
+    const char *name;
+    json_t *v;
+    json_object_foreach(o, name, v)
+    {
+        char at[160];
+        child(at, sizeof at, "/shapes", name);
+        if (!json_is_object(v)) {
+            diag(p, at, "must be an object");
+            continue;
+        }
+        only(p, v, at, keys);
+        sc_shape *x = &s->shape[s->nshape++];
+        copy_name(x->name, name, p, at);
+        if (json_object_get(v, "sphere")) {
+            if (json_object_size(v) != 1) diag(p, at, "a \"sphere\" takes no other field");
+            x->kind = SC_SHAPE_SPHERE;
+            x->radius_ratio = 0.5;
+            continue;
+        }
+        x->kind = SC_SHAPE_MESH;
+        x->mesh = shape_mesh(p, v, at);
+        if (!x->mesh) continue;
+        /* body frame, scaled to a volume-equivalent diameter of 1 m: a particle's size scales it */
+        pd_mass_props mp;
+        double rot[3][3];
+        pd_mesh_to_body_frame(x->mesh, &mp, rot);
+        double k = cbrt(PI / 6 / mp.volume), r2 = 0;
+        for (int i = 0; i < 3 * x->mesh->nverts; i++)
+            x->mesh->verts[i] *= k;
+        for (int i = 0; i < x->mesh->nverts; i++) {
+            const double *q = x->mesh->verts + 3 * i;
+            double d = q[0] * q[0] + q[1] * q[1] + q[2] * q[2];
+            r2 = d > r2 ? d : r2;
+        }
+        x->radius_ratio = sqrt(r2);
+    }
+}
+
+/* Normalises a quaternion field; 0 after a diagnostic. */
+static int quat(sc_parse *p, const char *at, double q[4])
+{
+    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+    if (!(n > 0)) {
+        diag(p, at, "quaternion [w, x, y, z] must not be zero");
+        return 0;
+    }
+    for (int k = 0; k < 4; k++)
+        q[k] /= n;
+    return 1;
+}
+
+static void parse_size(sc_parse *p, json_t *g, const char *at, sc_size *z)
+{
+    static const char *const keys[] = {"distribution", "mean", "std", "min", "max", NULL};
+    char c[160];
+    child(c, sizeof c, at, "size");
+    json_t *v = json_object_get(g, "size");
+    memset(z, 0, sizeof *z);
+    z->mean = z->min = z->max = 0.01;
+    if (!v) {
+        diag(p, c, "required: a diameter in m, or a distribution");
+        return;
+    }
+    if (json_is_number(v)) {
+        double d = json_number_value(v);
+        if (!(d > 0) || !isfinite(d))
+            diag(p, c, "must be > 0 m, got %g", d);
+        else
+            z->mean = z->min = z->max = d;
+        return;
+    }
+    if (!json_is_object(v)) {
+        diag(p, c, "must be a number (m) or a distribution object");
+        return;
+    }
+    only(p, v, c, keys);
+    const char *dist = str(p, v, c, "distribution", 1);
+    if (dist && !strcmp(dist, "uniform")) {
+        z->dist = SC_SIZE_UNIFORM;
+        z->min = num(p, v, c, "min", 1, 0.01, POSITIVE, "m");
+        z->max = num(p, v, c, "max", 1, z->min, POSITIVE, "m");
+        z->mean = 0.5 * (z->min + z->max);
+    } else if (dist && !strcmp(dist, "normal")) {
+        z->dist = SC_SIZE_NORMAL;
+        z->mean = num(p, v, c, "mean", 1, 0.01, POSITIVE, "m");
+        z->std = num(p, v, c, "std", 1, 0, NONNEG, "m");
+        z->min = num(p, v, c, "min", 0, z->mean - 3 * z->std, ANY, "m");
+        z->max = num(p, v, c, "max", 0, z->mean + 3 * z->std, POSITIVE, "m");
+        if (!(z->min > 0)) {
+            char cm[160];
+            child(cm, sizeof cm, c, "min");
+            diag(p, cm, "must be > 0 m (mean - 3 std is %g m when min is not given)", z->min);
+            z->min = z->mean;
+        }
+    } else if (dist) {
+        char cd[160];
+        child(cd, sizeof cd, c, "distribution");
+        diag(p, cd, "must be \"normal\" or \"uniform\", got \"%s\"", dist);
+        return;
+    }
+    if (z->min > z->max) diag(p, c, "min (%g m) is larger than max (%g m)", z->min, z->max);
+}
+
+static void parse_list(sc_parse *p, json_t *list, const char *at, sc_group *g)
+{
+    static const char *const keys[] = {"position",         "orientation", "velocity",
+                                       "angular_velocity", "size",        NULL};
+    static const double zero[3] = {0, 0, 0}, ident[4] = {1, 0, 0, 0};
+    size_t n = json_array_size(list);
+    if (n == 0) {
+        diag(p, at, "must list at least one particle");
+        return;
+    }
+    g->list = calloc(n, sizeof *g->list);
+    if (!g->list) return;
+    g->count = (long)n;
+    size_t i;
+    json_t *v;
+    json_array_foreach(list, i, v)
+    {
+        char c[160];
+        child_i(c, sizeof c, at, i);
+        sc_particle *x = &g->list[i];
+        if (!json_is_object(v)) {
+            diag(p, c, "must be an object");
+            continue;
+        }
+        only(p, v, c, keys);
+        numvec(p, v, c, "position", 3, NULL, x->position);
+        if (numvec(p, v, c, "orientation", 4, ident, x->orientation)) {
+            char co[160];
+            child(co, sizeof co, c, "orientation");
+            quat(p, co, x->orientation);
+        }
+        numvec(p, v, c, "velocity", 3, zero, x->velocity);
+        numvec(p, v, c, "angular_velocity", 3, zero, x->angular_velocity);
+        x->size = num(p, v, c, "size", 1, 0.01, POSITIVE, "m");
+    }
+}
+
+static void parse_particles(sc_parse *p, json_t *root)
+{
+    static const char *const keys[] = {
+        "shape",    "material",         "count", "size", "region", "arrangement", "orientation",
+        "velocity", "angular_velocity", "list",  NULL};
+    static const double zero[3] = {0, 0, 0};
+    pd_scenario *s = p->s;
+    json_t *a = json_object_get(root, "particles");
+    if (!json_is_array(a) || json_array_size(a) == 0) {
+        diag(p, "/particles", "required: an array of particle groups");
+        return;
+    }
+    s->group = calloc(json_array_size(a), sizeof *s->group);
+    if (!s->group) return;
+    size_t i;
+    json_t *v;
+    json_array_foreach(a, i, v)
+    {
+        char at[160], c[160];
+        child_i(at, sizeof at, "/particles", i);
+        if (!json_is_object(v)) {
+            diag(p, at, "must be an object");
+            continue;
+        }
+        only(p, v, at, keys);
+        sc_group *g = &s->group[s->ngroup++];
+        g->orientation[0] = 1;
+        const char *sh = str(p, v, at, "shape", 1);
+        g->shape = sh ? find_shape(s, sh) : -1;
+        if (sh && g->shape < 0) {
+            child(c, sizeof c, at, "shape");
+            diag(p, c, "no shape named '%s' in /shapes", sh);
+        }
+        g->material = material_ref(p, v, at, "material");
+        json_t *list = json_object_get(v, "list");
+        if (list) {
+            child(c, sizeof c, at, "list");
+            if (!json_is_array(list)) {
+                diag(p, c, "must be an array of particles");
+                continue;
+            }
+            static const char *const gen[] = {"count",           "size",        "region",
+                                              "arrangement",     "orientation", "velocity",
+                                              "angular_velocity"};
+            for (int k = 0; k < 7; k++)
+                if (json_object_get(v, gen[k])) {
+                    char ck[160];
+                    child(ck, sizeof ck, at, gen[k]);
+                    diag(p, ck, "not allowed with \"list\" (give it per particle)");
+                }
+            parse_list(p, list, c, g);
+            continue;
+        }
+        child(c, sizeof c, at, "count");
+        json_t *cnt = json_object_get(v, "count");
+        if (!json_is_integer(cnt) || json_integer_value(cnt) < 1 ||
+            json_integer_value(cnt) > 100000000)
+            diag(p, c, "required: an integer from 1 to 1e8 (or give \"list\")");
+        else
+            g->count = (long)json_integer_value(cnt);
+        parse_size(p, v, at, &g->size);
+        json_t *reg = obj(p, v, at, "region", 1);
+        if (reg) {
+            static const char *const rk[] = {"min", "max", NULL};
+            child(c, sizeof c, at, "region");
+            only(p, reg, c, rk);
+            if (numvec(p, reg, c, "min", 3, NULL, g->region_min) &&
+                numvec(p, reg, c, "max", 3, NULL, g->region_max))
+                for (int k = 0; k < 3; k++)
+                    if (!(g->region_max[k] > g->region_min[k])) {
+                        diag(p, c, "max must exceed min on every axis (axis %d: %g <= %g m)", k,
+                             g->region_max[k], g->region_min[k]);
+                        break;
+                    }
+        }
+        const char *arr = str(p, v, at, "arrangement", 0);
+        if (arr && !strcmp(arr, "random"))
+            g->random_arrangement = 1;
+        else if (arr && strcmp(arr, "lattice")) {
+            child(c, sizeof c, at, "arrangement");
+            diag(p, c, "must be \"lattice\" or \"random\", got \"%s\"", arr);
+        }
+        json_t *o = json_object_get(v, "orientation");
+        child(c, sizeof c, at, "orientation");
+        if (json_is_string(o) && !strcmp(json_string_value(o), "random"))
+            g->random_orientation = 1;
+        else if (o && !json_is_array(o))
+            diag(p, c, "must be \"random\" or a quaternion [w, x, y, z]");
+        else if (o && numvec(p, v, at, "orientation", 4, NULL, g->orientation))
+            quat(p, c, g->orientation);
+        numvec(p, v, at, "velocity", 3, zero, g->velocity);
+        numvec(p, v, at, "angular_velocity", 3, zero, g->angular_velocity);
+    }
+}
+
+/* The solid box [lo, hi] as a closed mesh. */
+static int box_mesh(const double lo[3], const double hi[3], pd_mesh **out, pd_error *err)
+{
+    static const int t[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                              2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    double v[24];
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++)
+            v[3 * i + k] = (i >> k) & 1 ? hi[k] : lo[k];
+    return pd_mesh_from_arrays(v, 8, t, 12, "box", out, err);
+}
+
+static void parse_walls(sc_parse *p, json_t *root)
+{
+    static const char *const keys[] = {"name",     "material",         "box",    "mesh",
+                                       "velocity", "angular_velocity", "center", NULL};
+    static const double zero[3] = {0, 0, 0};
+    pd_scenario *s = p->s;
+    json_t *a = json_object_get(root, "walls");
+    if (!a) return;
+    if (!json_is_array(a)) {
+        diag(p, "/walls", "must be an array");
+        return;
+    }
+    s->wall = calloc(json_array_size(a) + 1, sizeof *s->wall);
+    if (!s->wall) return;
+    size_t i;
+    json_t *v;
+    json_array_foreach(a, i, v)
+    {
+        char at[160], c[160];
+        child_i(at, sizeof at, "/walls", i);
+        if (!json_is_object(v)) {
+            diag(p, at, "must be an object");
+            continue;
+        }
+        only(p, v, at, keys);
+        sc_wall *w = &s->wall[s->nwall++];
+        const char *name = str(p, v, at, "name", 1);
+        if (name) {
+            child(c, sizeof c, at, "name");
+            copy_name(w->name, name, p, c);
+            for (int k = 0; k + 1 < s->nwall; k++)
+                if (!strcmp(s->wall[k].name, w->name)) diag(p, c, "a second wall named '%s'", name);
+        }
+        w->material = material_ref(p, v, at, "material");
+        json_t *box = json_object_get(v, "box");
+        const char *file = str(p, v, at, "mesh", 0);
+        pd_error err = {0};
+        if ((box != NULL) == (file != NULL)) {
+            diag(p, at, "needs exactly one of \"box\" or \"mesh\"");
+        } else if (box) {
+            static const char *const bk[] = {"min", "max", NULL};
+            double lo[3], hi[3];
+            child(c, sizeof c, at, "box");
+            if (!json_is_object(box)) {
+                diag(p, c, "must be an object {\"min\": [..], \"max\": [..]}");
+            } else {
+                only(p, box, c, bk);
+                if (numvec(p, box, c, "min", 3, NULL, lo) &&
+                    numvec(p, box, c, "max", 3, NULL, hi)) {
+                    if (!(hi[0] > lo[0] && hi[1] > lo[1] && hi[2] > lo[2]))
+                        diag(p, c, "max must exceed min on every axis");
+                    else if (box_mesh(lo, hi, &w->mesh, &err) != PD_OK)
+                        diag(p, c, "%s", err.msg);
+                }
+            }
+        } else {
+            char path[4096];
+            if (file[0] == '/' || !p->base_dir)
+                put(path, sizeof path, "%s", file);
+            else
+                put(path, sizeof path, "%s/%s", p->base_dir, file);
+            if (pd_mesh_load(path, &w->mesh, &err) != PD_OK) {
+                child(c, sizeof c, at, "mesh");
+                diag(p, c, "%s", err.msg);
+            }
+        }
+        numvec(p, v, at, "velocity", 3, zero, w->velocity);
+        numvec(p, v, at, "angular_velocity", 3, zero, w->angular_velocity);
+        numvec(p, v, at, "center", 3, zero, w->center);
+    }
+}
+
+static void parse_rest(sc_parse *p, json_t *root)
+{
+    static const double g0[3] = {0, 0, -9.81}, zero[3] = {0, 0, 0};
+    pd_scenario *s = p->s;
+    const char *name = str(p, root, "", "name", 0);
+    copy_name(s->name, name ? name : "scenario", p, "/name");
+    const char *prec = str(p, root, "", "precision", 0);
+    s->double_precision = 1;
+    if (prec && !strcmp(prec, "single"))
+        s->double_precision = 0;
+    else if (prec && strcmp(prec, "double"))
+        diag(p, "/precision", "must be \"double\" or \"single\", got \"%s\"", prec);
+    json_t *seed = json_object_get(root, "seed");
+    s->seed = 1;
+    if (seed && (!json_is_integer(seed) || json_integer_value(seed) < 0))
+        diag(p, "/seed", "must be a non-negative integer");
+    else if (seed)
+        s->seed = (unsigned long long)json_integer_value(seed);
+    numvec(p, root, "", "gravity", 3, g0, s->gravity);
+    json_t *au = json_object_get(root, "allow_unstable_dt");
+    if (au && !json_is_boolean(au)) diag(p, "/allow_unstable_dt", "must be true or false");
+    s->allow_unstable_dt = json_is_true(au);
+    json_t *f = obj(p, root, "", "fluid", 0);
+    if (f) {
+        static const char *const fk[] = {"viscosity", "velocity", NULL};
+        only(p, f, "/fluid", fk);
+        s->has_fluid = 1;
+        s->fluid_viscosity = num(p, f, "/fluid", "viscosity", 1, 0, NONNEG, "Pa s");
+        numvec(p, f, "/fluid", "velocity", 3, zero, s->fluid_velocity);
+    }
+    s->output_fields = SC_OUT_POSITION | SC_OUT_ORIENTATION | SC_OUT_VELOCITY | SC_OUT_ANGULAR;
+    json_t *out = obj(p, root, "", "output", 0);
+    if (out) {
+        static const char *const ok[] = {"fields", NULL};
+        static const char *const names[] = {"position", "orientation", "velocity",
+                                            "angular_velocity"};
+        only(p, out, "/output", ok);
+        json_t *fl = json_object_get(out, "fields");
+        if (fl) {
+            s->output_fields = SC_OUT_POSITION | SC_OUT_ORIENTATION; /* always: viewers need them */
+            if (!json_is_array(fl)) diag(p, "/output/fields", "must be an array of field names");
+            size_t i;
+            json_t *v;
+            json_array_foreach(fl, i, v)
+            {
+                int bit = 0;
+                for (int k = 0; k < 4; k++)
+                    if (json_is_string(v) && !strcmp(json_string_value(v), names[k])) bit = 1 << k;
+                if (!bit) {
+                    char c[160];
+                    child_i(c, sizeof c, "/output/fields", i);
+                    diag(p, c, "must be one of position, orientation, velocity, angular_velocity");
+                }
+                s->output_fields |= bit;
+            }
+        }
+    }
+}
+
+/* Every pair of materials that can touch needs an interaction. */
+static void check_pairs(sc_parse *p)
+{
+    pd_scenario *s = p->s;
+    int used_p[64] = {0}, used_w[64] = {0};
+    for (int g = 0; g < s->ngroup; g++)
+        if (s->group[g].material >= 0 && s->group[g].material < 64)
+            used_p[s->group[g].material] = 1;
+    for (int w = 0; w < s->nwall; w++)
+        if (s->wall[w].material >= 0 && s->wall[w].material < 64) used_w[s->wall[w].material] = 1;
+    for (int a = 0; a < s->nmat && a < 64; a++) {
+        if (!used_p[a]) continue;
+        for (int b = a; b < s->nmat && b < 64; b++)
+            if ((used_p[b] || used_w[b]) && !sc_interaction_of(s, a, b))
+                diag(p, "/interactions",
+                     "no interaction between '%s' and '%s', which can touch: add "
+                     "{\"between\": [\"%s\", \"%s\"], ...}",
+                     s->mat[a].name, s->mat[b].name, s->mat[a].name, s->mat[b].name);
+        for (int b = 0; b < a; b++)
+            if (used_w[b] && !used_p[b] && !sc_interaction_of(s, a, b))
+                diag(p, "/interactions",
+                     "no interaction between '%s' and '%s', which can touch: add "
+                     "{\"between\": [\"%s\", \"%s\"], ...}",
+                     s->mat[a].name, s->mat[b].name, s->mat[a].name, s->mat[b].name);
+    }
+    if (s->nmat > 64) diag(p, "/materials", "at most 64 materials");
+}
+
+/* A generated group must fit its region on a lattice of circumscribed spheres of the largest. */
+static void check_fit(sc_parse *p)
+{
+    pd_scenario *s = p->s;
+    for (int i = 0; i < s->ngroup; i++) {
+        sc_group *g = &s->group[i];
+        if (g->list || g->shape < 0 || g->count <= 0) continue;
+        double cell = 2 * s->shape[g->shape].radius_ratio * g->size.max;
+        double room = 1;
+        for (int k = 0; k < 3; k++)
+            room *= floor((g->region_max[k] - g->region_min[k]) / cell);
+        if (room < (double)g->count) {
+            char c[160];
+            child_i(c, sizeof c, "/particles", (size_t)i);
+            diag(p, c,
+                 "%ld particles of size up to %g m do not fit in the region: it holds %.0f "
+                 "without initial overlaps (cell %g m)",
+                 g->count, g->size.max, room, cell);
+        }
+    }
+}
+
+void pd_scenario_destroy(pd_scenario *s)
+{
+    if (!s) return;
+    for (int i = 0; i < s->nshape; i++)
+        pd_mesh_destroy(s->shape[i].mesh);
+    for (int i = 0; i < s->ngroup; i++)
+        free(s->group[i].list);
+    for (int i = 0; i < s->nwall; i++)
+        pd_mesh_destroy(s->wall[i].mesh);
+    free(s->mat);
+    free(s->inter);
+    free(s->shape);
+    free(s->group);
+    free(s->wall);
+    free(s->json);
+    free(s);
+}
+
+int pd_scenario_parse(const char *json_text, const char *base_dir, pd_scenario **out,
+                      pd_diags *diags, pd_error *err)
+{
+    static const char *const keys[] = {
+        "name",   "precision", "seed",  "time",  "gravity", "materials",         "interactions",
+        "shapes", "particles", "walls", "fluid", "output",  "allow_unstable_dt", NULL};
+    *out = NULL;
+    json_error_t je;
+    json_t *root = json_loads(json_text, JSON_REJECT_DUPLICATES, &je);
+    sc_parse p = {NULL, diags, base_dir, 0};
+    if (!root) {
+        char at[64];
+        put(at, sizeof at, "line %d, column %d", je.line, je.column);
+        diag(&p, "", "not valid JSON at %s: %s", at, je.text);
+        return pd_error_set(err, PD_EINVAL, "scenario is not valid JSON at %s: %s", at, je.text);
+    }
+    if (!json_is_object(root)) {
+        json_decref(root);
+        diag(&p, "", "a scenario is a JSON object");
+        return pd_error_set(err, PD_EINVAL, "scenario: a scenario is a JSON object");
+    }
+    pd_scenario *s = calloc(1, sizeof *s);
+    if (!s || !(s->json = strdup(json_text))) {
+        free(s);
+        json_decref(root);
+        return pd_error_set(err, PD_ENOMEM, "scenario: out of memory");
+    }
+    p.s = s;
+    only(&p, root, "", keys);
+    parse_rest(&p, root);
+    parse_time(&p, root);
+    parse_materials(&p, root);
+    parse_interactions(&p, root);
+    parse_shapes(&p, root);
+    parse_particles(&p, root);
+    parse_walls(&p, root);
+    json_decref(root);
+    if (!s->mat || (!s->shape && s->nshape) || (!s->group && s->ngroup)) {
+        pd_scenario_destroy(s);
+        return pd_error_set(err, PD_ENOMEM, "scenario: out of memory");
+    }
+    if (!p.failed) {
+        check_pairs(&p);
+        check_fit(&p);
+    }
+    if (!p.failed) {
+        double rayleigh, hertz, stable;
+        sc_dt_estimates(s, &rayleigh, &hertz, &stable);
+        if (s->dt > stable && !s->allow_unstable_dt)
+            diag(&p, "/time/dt",
+                 "%g s exceeds the stable estimate %.3g s (0.3 x Rayleigh time %.3g s of the "
+                 "smallest particle, 1/20 of the shortest Hertz contact time %.3g s); set "
+                 "\"allow_unstable_dt\": true to run anyway",
+                 s->dt, stable, rayleigh, hertz);
+    }
+    if (p.failed) {
+        if (diags && diags->n)
+            pd_error_set(err, PD_EINVAL, "%s: %s", diags->items[0].path, diags->items[0].msg);
+        else
+            pd_error_set(err, PD_EINVAL, "scenario is invalid");
+        pd_scenario_destroy(s);
+        return PD_EINVAL;
+    }
+    *out = s;
+    return PD_OK;
+}
+
+int pd_scenario_load(const char *path, pd_scenario **out, pd_diags *diags, pd_error *err)
+{
+    *out = NULL;
+    FILE *f = fopen(path, "rb");
+    if (!f) return pd_error_set(err, PD_EIO, "%s: cannot open: %s", path, strerror(errno));
+    char *buf = NULL;
+    size_t len = 0, cap = 0;
+    for (;;) {
+        if (len + 65536 + 1 > cap) {
+            cap = cap ? 2 * cap : 131072;
+            if (cap > ((size_t)256 << 20)) {
+                free(buf);
+                fclose(f);
+                return pd_error_set(err, PD_EINVAL, "%s: larger than 256 MiB", path);
+            }
+            char *nb = realloc(buf, cap);
+            if (!nb) {
+                free(buf);
+                fclose(f);
+                return pd_error_set(err, PD_ENOMEM, "%s: out of memory", path);
+            }
+            buf = nb;
+        }
+        size_t n = fread(buf + len, 1, 65536, f);
+        len += n;
+        if (n < 65536) break;
+    }
+    int rd_err = ferror(f);
+    fclose(f);
+    if (rd_err) {
+        free(buf);
+        return pd_error_set(err, PD_EIO, "%s: read error", path);
+    }
+    buf[len] = 0;
+    char dir[4096];
+    put(dir, sizeof dir, "%s", path);
+    char *slash = strrchr(dir, '/');
+    const char *base = NULL;
+    if (slash) {
+        *slash = 0;
+        base = dir[0] ? dir : "/";
+    }
+    int rc = pd_scenario_parse(buf, base, out, diags, err);
+    free(buf);
+    if (rc == PD_EINVAL && err) {
+        char first[sizeof err->msg];
+        put(first, sizeof first, "%s", err->msg);
+        pd_error_set(err, PD_EINVAL, "%s: %s", path, first);
+    }
+    return rc;
+}

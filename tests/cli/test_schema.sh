@@ -1,0 +1,47 @@
+#!/bin/sh
+# test_schema.sh - schemas/scenario.schema.json and the C parser agree: documents the schema
+# accepts, `polydem validate` accepts (examples/), and documents with a structural error are
+# refused by both. Uses Debian's python3-jsonschema (make deps). Prints "N passed, N failed".
+POLYDEM=${POLYDEM:-build/polydem}
+PY=/usr/bin/python3
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+ok() { passed=$((passed + 1)); echo "ok   $1"; }
+bad() { failed=$((failed + 1)); echo "FAIL $1: $2"; }
+
+schema_check() { # FILE -> exit 0 when the schema accepts it, message on stderr otherwise
+    $PY - "$1" <<'PY'
+import json, sys, jsonschema
+schema = json.load(open("schemas/scenario.schema.json"))
+jsonschema.Draft202012Validator.check_schema(schema)
+errors = sorted(jsonschema.Draft202012Validator(schema).iter_errors(json.load(open(sys.argv[1]))),
+                key=lambda e: list(e.absolute_path))
+for e in errors:
+    print("/" + "/".join(str(p) for p in e.absolute_path) + ": " + e.message, file=sys.stderr)
+sys.exit(1 if errors else 0)
+PY
+}
+
+if $PY -c "import jsonschema" 2>/dev/null; then
+    for f in examples/*.json; do
+        if schema_check "$f" 2>"$tmp/e" && $POLYDEM validate "$f" >/dev/null 2>&1; then
+            ok "accepted_by_both $f"
+        else bad "accepted_by_both $f" "$(cat "$tmp/e")"; fi
+    done
+    # structural errors: both refuse
+    n=0
+    for edit in 's/"friction"/"frction"/' 's/"dt": 1e-6/"dt": -1/' 's/"size": 0.02/"size": "big"/' \
+        's/"rock", "rock"/"rock"/'; do
+        n=$((n + 1))
+        sed "$edit" examples/collision.json >"$tmp/bad$n.json"
+        if ! schema_check "$tmp/bad$n.json" 2>/dev/null && ! $POLYDEM validate "$tmp/bad$n.json" >/dev/null 2>&1; then
+            ok "refused_by_both $edit"
+        else bad "refused_by_both $edit" "one of them accepted it"; fi
+    done
+else
+    bad schema_tools "python3-jsonschema is missing: run make deps"
+fi
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]

@@ -1,0 +1,309 @@
+/*
+ * test_scenario.c - scenario parsing and validation (engine/scenario*.c): the issue's example,
+ * defaults, every error reported with its JSON path, and the stable time step estimates against
+ * the formulas computed here independently.
+ */
+#include <string.h>
+#include <unistd.h>
+
+#include "polydem.h"
+#include "scenario.h"
+#include "test.h"
+
+static const double PI = 3.14159265358979323846;
+
+/* Parses text; returns the scenario (or NULL) and leaves the diagnostics in *d. */
+static pd_scenario *parse(const char *text, pd_diags *d)
+{
+    pd_scenario *s = NULL;
+    pd_error err = {0};
+    memset(d, 0, sizeof *d);
+    pd_scenario_parse(text, NULL, &s, d, &err);
+    return s;
+}
+
+/* Whether some diagnostic has this path and a message containing frag. */
+static int has(const pd_diags *d, const char *path, const char *frag)
+{
+    for (int i = 0; i < d->n; i++)
+        if (!strcmp(d->items[i].path, path) && strstr(d->items[i].msg, frag)) return 1;
+    printf("  no diagnostic at %s containing \"%s\"; got:\n", path, frag);
+    for (int i = 0; i < d->n; i++)
+        printf("    %s: %s\n", d->items[i].path, d->items[i].msg);
+    return 0;
+}
+
+/* A small valid scenario with room for one substitution (%s) inside the particle group. */
+#define BASE_HEAD                                                                                  \
+    "{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"                                               \
+    "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"                     \
+    "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"                                     \
+    "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}},"
+#define BASE_GROUP                                                                                 \
+    "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", \"count\": 10, \"size\": 0.01,"    \
+    " \"region\": {\"min\": [0, 0, 0], \"max\": [0.1, 0.1, 0.1]}}]}"
+
+TEST(issue_example_parses_with_defaults)
+{
+    char dir[] = "/tmp/pd_scenario_XXXXXX";
+    CHECK(mkdtemp(dir) != NULL);
+    char stl[512], scen[512];
+    pd_mesh *cube = NULL;
+    pd_error err = {0};
+    pd_mesh_builtin("cube", 0, 0, &cube, &err);
+    snprintf(stl, sizeof stl, "%s/rock.stl", dir);
+    CHECK(pd_mesh_write_stl(cube, stl, &err) == PD_OK);
+    snprintf(stl, sizeof stl, "%s/bin.stl", dir);
+    CHECK(pd_mesh_write_stl(cube, stl, &err) == PD_OK);
+    pd_mesh_destroy(cube);
+    /* the issue's example, with steel added to the materials and a closed "v" */
+    const char *text =
+        "{ \"name\": \"packing\", \"precision\": \"double\", \"seed\": 1,"
+        "\"time\": {\"dt\": 1e-5, \"duration\": 0.5, \"output_interval\": 0.01, "
+        "\"stats_interval\": 0.001},"
+        "\"gravity\": [0, 0, -9.81],"
+        "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7, "
+        "\"poisson_ratio\": 0.25, \"shear_modulus\": 2e7},"
+        " \"steel\": {\"density\": 7800, \"youngs_modulus\": 2e11, \"poisson_ratio\": 0.3}},"
+        "\"interactions\": [{\"between\": [\"rock\", \"steel\"], \"friction\": 0.35, \"damping\": "
+        "0.382097, \"model\": \"hertz_mindlin\", \"cohesion\": 0},"
+        " {\"between\": [\"rock\", \"rock\"], \"friction\": 0.5}],"
+        "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}, \"r\": {\"builtin\": \"rock\", "
+        "\"triangles\": 80}, \"m\": {\"mesh\": \"rock.stl\"}, \"v\": {\"vertices\": [[1,1,1],"
+        "[1,-1,-1],[-1,1,-1],[-1,-1,1]], \"triangles\": [[0,1,2],[0,3,1],[0,2,3],[1,3,2]]}, "
+        "\"ball\": {\"sphere\": {}}},"
+        "\"particles\": ["
+        " {\"shape\": \"s\", \"material\": \"rock\", \"count\": 1000, \"size\": {\"distribution\": "
+        "\"normal\", \"mean\": 0.01, \"std\": 0.005, \"min\": 0.005, \"max\": 0.01}, "
+        "\"region\": {\"min\": [0,0,0], \"max\": [0.2,0.2,0.4]}, \"arrangement\": \"lattice\", "
+        "\"orientation\": \"random\", \"velocity\": [0,0,0]},"
+        " {\"shape\": \"ball\", \"material\": \"rock\", \"list\": [{\"position\": [0,0,0.1], "
+        "\"orientation\": [1,0,0,0], \"velocity\": [0,0,-1], \"angular_velocity\": [0,0,0], "
+        "\"size\": 0.02}]}],"
+        "\"walls\": [{\"name\": \"floor\", \"material\": \"steel\", \"box\": {\"min\": "
+        "[-1,-1,-0.1], "
+        "\"max\": [1,1,0]}},"
+        " {\"name\": \"bin\", \"material\": \"steel\", \"mesh\": \"bin.stl\", \"velocity\": "
+        "[0,0,0]}],"
+        "\"fluid\": {\"viscosity\": 1.8e-5, \"velocity\": [0,0,0]},"
+        "\"output\": {\"fields\": [\"position\", \"orientation\", \"velocity\", "
+        "\"angular_velocity\"]} }";
+    snprintf(scen, sizeof scen, "%s/packing.json", dir);
+    FILE *f = fopen(scen, "w");
+    CHECK(f != NULL);
+    if (!f) return;
+    fputs(text, f);
+    fclose(f);
+    pd_scenario *s = NULL;
+    pd_diags d = {0, 0, NULL};
+    int rc = pd_scenario_load(scen, &s, &d, &err);
+    if (rc != PD_OK)
+        for (int i = 0; i < d.n; i++)
+            printf("    %s: %s\n", d.items[i].path, d.items[i].msg);
+    CHECK_EQ_INT(PD_OK, rc);
+    if (s) {
+        pd_scenario_summary m;
+        pd_scenario_summarize(s, &m);
+        CHECK_EQ_INT(1001, m.particles);
+        CHECK_EQ_INT(5, m.shapes);
+        CHECK_EQ_INT(2, m.walls);
+        CHECK_EQ_INT(50000, m.steps);
+        CHECK(m.dt_stable >= 1e-5); /* the example's own dt is stable */
+        CHECK(m.memory_bytes > 1001 * 100.0);
+        /* shear modulus default E / (2 (1 + nu)) for steel, explicit for rock */
+        CHECK_REL(2e11 / 2.6, s->mat[1].shear_modulus, 1e-15);
+        CHECK_REL(2e7, s->mat[0].shear_modulus, 1e-15);
+        /* meshes are rescaled to a volume-equivalent diameter of 1 m, in their body frame */
+        pd_mass_props mp;
+        pd_mesh_mass_props(s->shape[0].mesh, &mp);
+        CHECK_REL(PI / 6, mp.volume, 1e-12);
+        CHECK_NEAR(0, mp.centroid[0], 1e-12);
+        CHECK(s->group[0].random_orientation);
+        CHECK_EQ_INT(SC_SIZE_NORMAL, s->group[0].size.dist);
+        CHECK(s->has_fluid);
+    }
+    pd_scenario_destroy(s);
+    pd_diags_free(&d);
+    unlink(scen);
+    snprintf(stl, sizeof stl, "%s/rock.stl", dir);
+    unlink(stl);
+    snprintf(stl, sizeof stl, "%s/bin.stl", dir);
+    unlink(stl);
+    rmdir(dir);
+}
+
+TEST(defaults)
+{
+    pd_diags d;
+    pd_scenario *s = parse(BASE_HEAD BASE_GROUP, &d);
+    CHECK(s != NULL);
+    if (!s) return;
+    CHECK(s->double_precision);
+    CHECK_NEAR(-9.81, s->gravity[2], 0);
+    CHECK_NEAR(0.25, s->mat[0].poisson_ratio, 0);
+    CHECK_NEAR(0.5, s->inter[0].friction, 0);
+    CHECK_EQ_INT(SC_MODEL_HERTZ_MINDLIN, s->inter[0].model);
+    CHECK_NEAR(0.01 / 100, s->output_interval, 1e-18);
+    CHECK_NEAR(0.01 / 1000, s->stats_interval, 1e-18);
+    CHECK_NEAR(1, s->group[0].orientation[0], 0);
+    CHECK_EQ_INT(SC_OUT_POSITION | SC_OUT_ORIENTATION | SC_OUT_VELOCITY | SC_OUT_ANGULAR,
+                 s->output_fields);
+    pd_scenario_destroy(s);
+    pd_diags_free(&d);
+}
+
+/* Each case: a scenario text, the JSON pointer of the problem, a fragment of the message. */
+static void expect_error(const char *text, const char *path, const char *frag)
+{
+    pd_diags d;
+    pd_scenario *s = parse(text, &d);
+    CHECK(s == NULL);
+    CHECK(has(&d, path, frag));
+    pd_scenario_destroy(s);
+    pd_diags_free(&d);
+}
+
+TEST(errors_name_the_field)
+{
+    expect_error("{\"time\": ", "/", "not valid JSON at line 1");
+    expect_error("[1, 2]", "/", "JSON object");
+    expect_error(BASE_HEAD "\"precision\": \"quad\"," BASE_GROUP, "/precision", "\"single\"");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01, \"dtt\": 1},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/time/dtt", "unknown field");
+    expect_error("{\"time\": {\"dt\": -1, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/time/dt", "must be > 0");
+    expect_error(BASE_HEAD "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", \"count\": "
+                           "10, \"size\": {\"distribution\": \"normal\", \"mean\": 0.01, \"std\": "
+                           "-0.005}, \"region\": {\"min\": [0,0,0], \"max\": [1,1,1]}}]}",
+                 "/particles/0/size/std", "must be >= 0");
+    expect_error(BASE_HEAD "\"particles\": [{\"shape\": \"s\", \"material\": \"granite\", "
+                           "\"count\": 1, \"size\": 0.01, \"region\": {\"min\": [0,0,0], "
+                           "\"max\": [1,1,1]}}]}",
+                 "/particles/0/material", "no material named 'granite'");
+    expect_error(BASE_HEAD "\"particles\": [{\"shape\": \"q\", \"material\": \"rock\", "
+                           "\"count\": 1, \"size\": 0.01, \"region\": {\"min\": [0,0,0], "
+                           "\"max\": [1,1,1]}}]}",
+                 "/particles/0/shape", "no shape named 'q'");
+    expect_error(BASE_HEAD "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", "
+                           "\"count\": 1, \"size\": 0.01, \"region\": {\"min\": [0,0,0], "
+                           "\"max\": [1,0,1]}}]}",
+                 "/particles/0/region", "max must exceed min");
+    expect_error(BASE_HEAD "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", "
+                           "\"count\": 100000, \"size\": 0.01, \"region\": {\"min\": [0,0,0], "
+                           "\"max\": [0.1,0.1,0.1]}}]}",
+                 "/particles/0", "do not fit in the region");
+    expect_error(BASE_HEAD "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", \"list\": "
+                           "[{\"position\": [0,0,0], \"orientation\": [0,0,0,0], \"size\": "
+                           "0.01}]}]}",
+                 "/particles/0/list/0/orientation", "must not be zero");
+    /* a used pair without an interaction */
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7},"
+                 " \"steel\": {\"density\": 7800, \"youngs_modulus\": 2e11}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}},"
+                 "\"walls\": [{\"name\": \"floor\", \"material\": \"steel\", \"box\": {\"min\": "
+                 "[-1,-1,-1], \"max\": [1,1,0]}}]," BASE_GROUP,
+                 "/interactions", "no interaction between 'rock' and 'steel'");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}, {\"between\": "
+                 "[\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/interactions/1", "a second interaction");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"], \"model\": \"linear\"}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/interactions/0/normal_stiffness", "required");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"mesh\": \"/nonexistent/rock.stl\"}}," BASE_GROUP,
+                 "/shapes/s/mesh", "/nonexistent/rock.stl");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"vertices\": [[0,0,0],[1,0,0],[0,1,0]], \"triangles\": "
+                 "[[0,1,2]]}}," BASE_GROUP,
+                 "/shapes/s", "open edge");
+    expect_error(BASE_HEAD "\"walls\": [{\"name\": \"w\", \"material\": \"rock\"}]," BASE_GROUP,
+                 "/walls/0", "exactly one of \"box\" or \"mesh\"");
+    expect_error(BASE_HEAD "\"output\": {\"fields\": [\"position\", \"pressure\"]}," BASE_GROUP,
+                 "/output/fields/1", "must be one of");
+}
+
+TEST(every_error_is_reported)
+{
+    /* three independent problems in one scenario: all three come back */
+    pd_diags d;
+    pd_scenario *s = parse("{\"time\": {\"dt\": 0, \"duration\": 0.01}, \"colour\": \"red\","
+                           "\"materials\": {\"rock\": {\"density\": -1, \"youngs_modulus\": 2e7}},"
+                           "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                           "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                           &d);
+    CHECK(s == NULL);
+    CHECK(has(&d, "/time/dt", "must be > 0"));
+    CHECK(has(&d, "/colour", "unknown field"));
+    CHECK(has(&d, "/materials/rock/density", "must be > 0"));
+    pd_diags_free(&d);
+}
+
+TEST(unstable_dt_is_refused_with_the_estimate)
+{
+    /* spheres of 1 cm, E = 2e7 Pa, nu = 0.25 (G = 8e6 Pa), rho = 2600, moving at 1 m/s without
+     * gravity: Rayleigh pi R sqrt(rho/G) / (0.1631 nu + 0.8766); Hertz 2.868 (m*^2/(R* E*^2 v))^0.2
+     * with m* = m/2, R* = R/2, E* = E / (2 (1 - nu^2)), v = 2 x 1 m/s (head-on) */
+    const char *fmt =
+        "{\"time\": {\"dt\": %g, \"duration\": 0.01}, \"gravity\": [0, 0, 0], %s"
+        "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+        "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+        "\"shapes\": {\"b\": {\"sphere\": {}}},"
+        "\"particles\": [{\"shape\": \"b\", \"material\": \"rock\", \"count\": 8, \"size\": 0.01,"
+        " \"velocity\": [1, 0, 0], \"region\": {\"min\": [0,0,0], \"max\": [0.1,0.1,0.1]}}]}";
+    double R = 0.005, G = 2e7 / 2.5, rho = 2600, nu = 0.25;
+    double tr = PI * R * sqrt(rho / G) / (0.1631 * nu + 0.8766);
+    double m = rho * 4.0 / 3.0 * PI * R * R * R, es = 2e7 / (2 * (1 - nu * nu));
+    double th = 2.868 * pow((m / 2) * (m / 2) / (R / 2 * es * es * 2.0), 0.2);
+    double stable = fmin(0.3 * tr, th / 20);
+    char text[2048];
+    pd_diags d;
+    snprintf(text, sizeof text, fmt, 1e-6, "");
+    pd_scenario *s = parse(text, &d);
+    CHECK(s != NULL);
+    if (s) {
+        pd_scenario_summary sum;
+        pd_scenario_summarize(s, &sum);
+        CHECK_REL(tr, sum.dt_rayleigh, 1e-12);
+        CHECK_REL(th, sum.dt_hertz, 1e-12);
+        CHECK_REL(stable, sum.dt_stable, 1e-12);
+    }
+    pd_scenario_destroy(s);
+    pd_diags_free(&d);
+    snprintf(text, sizeof text, fmt, 2 * stable, "");
+    s = parse(text, &d);
+    CHECK(s == NULL);
+    CHECK(has(&d, "/time/dt", "exceeds the stable estimate"));
+    pd_diags_free(&d);
+    snprintf(text, sizeof text, fmt, 2 * stable, "\"allow_unstable_dt\": true,");
+    s = parse(text, &d);
+    CHECK(s != NULL);
+    pd_scenario_destroy(s);
+    pd_diags_free(&d);
+}
+
+int main(void)
+{
+    RUN(issue_example_parses_with_defaults);
+    RUN(defaults);
+    RUN(errors_name_the_field);
+    RUN(every_error_is_reported);
+    RUN(unstable_dt_is_refused_with_the_estimate);
+    return TEST_DONE();
+}
