@@ -1,0 +1,151 @@
+/*
+ * bvh.h - linear bounding volume hierarchy (LBVH) over axis-aligned boxes: the broad phase of
+ * thesis section 5.5, shared by OpenCL kernels and host C (see pd_real.h).
+ *
+ * Build (Karras 2012, "Maximizing parallelism in the construction of BVHs, octrees and k-d
+ * trees"): leaves are the boxes sorted by the 63-bit Morton code of their centres; internal node
+ * i (0 .. n-2) finds its key range and split from longest common prefixes alone, so every node is
+ * built independently, one work-item each. Equal codes are told apart by the leaf index, as Karras
+ * does. Children: an index below n-1 is an internal node, at or above n-1 the leaf (index - (n-1))
+ * in sorted order. Refit then takes boxes bottom-up: a node is finished by whichever of its two
+ * children arrives second (on a device, an atomic counter per node decides; min/max are exact, so
+ * the result does not depend on the order).
+ *
+ * Traversal: depth first with a fixed stack, reporting every leaf whose box meets the query box.
+ */
+#ifndef PD_BVH_H
+#define PD_BVH_H
+
+#include "pd_real.h"
+
+#ifdef __OPENCL_VERSION__
+typedef ulong bvh_code;
+#define BVH_CLZ64(x) ((int)clz(x))
+#else
+#include <stdint.h>
+typedef uint64_t bvh_code;
+#define BVH_CLZ64(x) ((x) ? __builtin_clzll(x) : 64)
+#endif
+
+/* depth bound: prefixes of 63 code bits plus up to 32 index bits on equal codes */
+#define BVH_STACK 128
+
+/* Spreads the low 21 bits of v so there are two zero bits between each. */
+PD_FN bvh_code bvh_spread3(bvh_code v)
+{
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffull;
+    v = (v | v << 16) & 0x1f0000ff0000ffull;
+    v = (v | v << 8) & 0x100f00f00f00f00full;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+    v = (v | v << 2) & 0x1249249249249249ull;
+    return v;
+}
+
+/* 63-bit Morton code of point p inside the scene box [lo, lo + 1/inv_ext). */
+PD_FN bvh_code bvh_morton(pd_v3 p, pd_v3 lo, pd_v3 inv_ext)
+{
+    pd_real s = PD_R(2097151); /* 2^21 - 1 */
+    pd_real fx = (p.x - lo.x) * inv_ext.x * s, fy = (p.y - lo.y) * inv_ext.y * s,
+            fz = (p.z - lo.z) * inv_ext.z * s;
+    fx = fx < 0 ? 0 : fx > s ? s : fx;
+    fy = fy < 0 ? 0 : fy > s ? s : fy;
+    fz = fz < 0 ? 0 : fz > s ? s : fz;
+    return bvh_spread3((bvh_code)fx) << 2 | bvh_spread3((bvh_code)fy) << 1 |
+           bvh_spread3((bvh_code)fz);
+}
+
+/* Length of the common prefix of sorted keys i and j (with the index appended on equal codes);
+ * -1 when j is out of range. */
+PD_FN int bvh_delta(PD_GLOBAL const bvh_code *codes, int n, int i, int j)
+{
+    if (j < 0 || j >= n) return -1;
+    bvh_code a = codes[i], b = codes[j];
+    if (a == b) return 64 + BVH_CLZ64((bvh_code)(i ^ j));
+    return BVH_CLZ64(a ^ b);
+}
+
+/* Internal node i of the n leaves: its children (Karras 2012, figure 4). */
+PD_FN void bvh_build_node(PD_GLOBAL const bvh_code *codes, int n, int i, PD_GLOBAL int *left,
+                          PD_GLOBAL int *right, PD_GLOBAL int *parent)
+{
+    /* direction of the node's range */
+    int d = bvh_delta(codes, n, i, i + 1) - bvh_delta(codes, n, i, i - 1) >= 0 ? 1 : -1;
+    int dmin = bvh_delta(codes, n, i, i - d);
+    /* upper bound of the range's length, then its exact other end */
+    int lmax = 2;
+    while (bvh_delta(codes, n, i, i + lmax * d) > dmin)
+        lmax *= 2;
+    int l = 0;
+    for (int t = lmax / 2; t >= 1; t /= 2)
+        if (bvh_delta(codes, n, i, i + (l + t) * d) > dmin) l += t;
+    int j = i + l * d;
+    /* the split: the highest position sharing more than the range's common prefix */
+    int dnode = bvh_delta(codes, n, i, j), s = 0;
+    for (int t = (l + 1) / 2;; t = (t + 1) / 2) {
+        if (bvh_delta(codes, n, i, i + (s + t) * d) > dnode) s += t;
+        if (t == 1) break;
+    }
+    int gamma = i + s * d + (d < 0 ? d : 0);
+    int lo = i < j ? i : j, hi = i < j ? j : i;
+    int a = lo == gamma ? n - 1 + gamma : gamma; /* a leaf when the range ends there */
+    int b = hi == gamma + 1 ? n - 1 + gamma + 1 : gamma + 1;
+    left[i] = a;
+    right[i] = b;
+    parent[a] = i;
+    parent[b] = i;
+}
+
+/* Box of internal node i from its children's boxes (6 reals per node: lo xyz, hi xyz; leaves
+ * follow the n - 1 internal nodes). */
+PD_FN void bvh_node_box(PD_GLOBAL pd_real *box, PD_GLOBAL const int *left,
+                        PD_GLOBAL const int *right, int i)
+{
+    PD_GLOBAL const pd_real *a = box + 6 * left[i], *b = box + 6 * right[i];
+    PD_GLOBAL pd_real *o = box + 6 * i;
+    for (int k = 0; k < 3; k++) {
+        o[k] = pd_min(a[k], b[k]);
+        o[3 + k] = pd_max(a[3 + k], b[3 + k]);
+    }
+}
+
+PD_FN int bvh_boxes_meet(PD_GLOBAL const pd_real *a, const pd_real *q)
+{
+    return a[0] <= q[3] && q[0] <= a[3] && a[1] <= q[4] && q[1] <= a[4] && a[2] <= q[5] &&
+           q[2] <= a[5];
+}
+
+/*
+ * Leaves (sorted positions) whose boxes meet query box q (lo xyz, hi xyz), written to out up to
+ * cap; returns how many there are (more than cap means the caller retries with more room).
+ */
+PD_FN int bvh_query(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *left,
+                    PD_GLOBAL const int *right, int n, const pd_real *q, PD_GLOBAL int *out,
+                    int cap)
+{
+    int count = 0;
+    if (n == 1) {
+        if (bvh_boxes_meet(box, q)) {
+            if (cap > 0) out[0] = 0;
+            count = 1;
+        }
+        return count;
+    }
+    int stack[BVH_STACK], top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+        int node = stack[--top];
+        if (!bvh_boxes_meet(box + 6 * node, q)) continue;
+        if (node >= n - 1) {
+            if (count < cap) out[count] = node - (n - 1);
+            count++;
+            continue;
+        }
+        if (top + 2 > BVH_STACK) return -1; /* deeper than any LBVH of 2^31 leaves */
+        stack[top++] = right[node];
+        stack[top++] = left[node];
+    }
+    return count;
+}
+
+#endif /* PD_BVH_H */
