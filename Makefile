@@ -35,7 +35,8 @@ BENCH_BIN := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 all: $(BUILD)/polydem
 
 DEB_PACKAGES := build-essential ocl-icd-opencl-dev opencl-c-headers pocl-opencl-icd clinfo \
-                clang-format libjansson-dev libhdf5-dev hdf5-tools python3-jsonschema
+                clang-format libjansson-dev libhdf5-dev hdf5-tools python3-jsonschema \
+                libxml2-utils
 deps:
 	@sh tools/install_deps.sh $(DEB_PACKAGES)
 
