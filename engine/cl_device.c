@@ -56,7 +56,14 @@ static const char *cl_errstr(cl_int e)
 #define CL_FAIL(err, what, e)                                                                      \
     pd_error_set(err, PD_ECL, "opencl: %s failed: %s (%d)", what, cl_errstr(e), (int)(e))
 
-int pd_device_list(pd_device_info *out, int max, int *n, pd_error *err)
+/* Every OpenCL device of every platform, in the order --device N counts them. */
+#define MAX_DEVICES 64
+typedef struct device_ref {
+    cl_device_id id;
+    cl_platform_id platform;
+} device_ref;
+
+static int enumerate_devices(device_ref *out, int *n, pd_error *err)
 {
     cl_platform_id plats[16];
     cl_uint nplat = 0;
@@ -70,96 +77,85 @@ int pd_device_list(pd_device_info *out, int max, int *n, pd_error *err)
     for (cl_uint p = 0; p < nplat && p < 16; p++) {
         cl_device_id devs[32];
         cl_uint ndev = 0;
-        char pname[128] = {0};
-        clGetPlatformInfo(plats[p], CL_PLATFORM_NAME, sizeof pname - 1, pname, NULL);
         if (clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, 32, devs, &ndev) != CL_SUCCESS) continue;
-        for (cl_uint d = 0; d < ndev && d < 32; d++, (*n)++) {
-            if (*n >= max) continue;
-            pd_device_info *o = &out[*n];
-            memset(o, 0, sizeof *o);
-            o->index = *n;
-            memcpy(o->platform, pname, sizeof o->platform);
-            clGetDeviceInfo(devs[d], CL_DEVICE_NAME, sizeof o->name - 1, o->name, NULL);
-            cl_device_type type = 0;
-            cl_uint cu = 0;
-            cl_ulong mem = 0;
-            char ext[8192] = {0};
-            clGetDeviceInfo(devs[d], CL_DEVICE_TYPE, sizeof type, &type, NULL);
-            clGetDeviceInfo(devs[d], CL_DEVICE_MAX_COMPUTE_UNITS, sizeof cu, &cu, NULL);
-            clGetDeviceInfo(devs[d], CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, NULL);
-            clGetDeviceInfo(devs[d], CL_DEVICE_EXTENSIONS, sizeof ext - 1, ext, NULL);
-            strcpy(o->type, (type & CL_DEVICE_TYPE_GPU)   ? "GPU"
-                            : (type & CL_DEVICE_TYPE_CPU) ? "CPU"
-                                                          : "other");
-            o->compute_units = (int)cu;
-            o->global_mem_bytes = (double)mem;
-            o->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
+        for (cl_uint d = 0; d < ndev && d < 32 && *n < MAX_DEVICES; d++) {
+            out[*n].id = devs[d];
+            out[*n].platform = plats[p];
+            (*n)++;
         }
+    }
+    return PD_OK;
+}
+
+int pd_device_list(pd_device_info *out, int max, int *n, pd_error *err)
+{
+    device_ref devs[MAX_DEVICES];
+    int rc = enumerate_devices(devs, n, err);
+    if (rc != PD_OK) return rc;
+    for (int i = 0; i < *n && i < max; i++) {
+        pd_device_info *o = &out[i];
+        memset(o, 0, sizeof *o);
+        o->index = i;
+        clGetPlatformInfo(devs[i].platform, CL_PLATFORM_NAME, sizeof o->platform - 1, o->platform,
+                          NULL);
+        clGetDeviceInfo(devs[i].id, CL_DEVICE_NAME, sizeof o->name - 1, o->name, NULL);
+        cl_device_type type = 0;
+        cl_uint cu = 0;
+        cl_ulong mem = 0;
+        char ext[8192] = {0};
+        clGetDeviceInfo(devs[i].id, CL_DEVICE_TYPE, sizeof type, &type, NULL);
+        clGetDeviceInfo(devs[i].id, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof cu, &cu, NULL);
+        clGetDeviceInfo(devs[i].id, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, NULL);
+        clGetDeviceInfo(devs[i].id, CL_DEVICE_EXTENSIONS, sizeof ext - 1, ext, NULL);
+        strcpy(o->type, (type & CL_DEVICE_TYPE_GPU)   ? "GPU"
+                        : (type & CL_DEVICE_TYPE_CPU) ? "CPU"
+                                                      : "other");
+        o->compute_units = (int)cu;
+        o->global_mem_bytes = (double)mem;
+        o->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
     }
     return PD_OK;
 }
 
 int pd_device_open(int index, pd_device **out, pd_error *err)
 {
-    cl_platform_id plats[16];
-    cl_uint nplat = 0;
-    cl_int e = clGetPlatformIDs(16, plats, &nplat);
+    device_ref devs[MAX_DEVICES];
+    int n = 0;
+    cl_int e;
     *out = NULL;
-    if (e != CL_SUCCESS || nplat == 0)
-        return pd_error_set(err, PD_ECL,
-                            "opencl: no platform found (%s); install an OpenCL "
-                            "driver, e.g. pocl-opencl-icd",
-                            cl_errstr(e));
-    /* Enumerate every device of every platform in order. */
-    cl_platform_id pick_plat = NULL;
-    cl_device_id pick = NULL, first = NULL, first_gpu = NULL;
-    cl_platform_id first_plat = NULL, gpu_plat = NULL;
-    int seen = 0;
-    for (cl_uint p = 0; p < nplat && p < 16; p++) {
-        cl_device_id devs[32];
-        cl_uint ndev = 0;
-        if (clGetDeviceIDs(plats[p], CL_DEVICE_TYPE_ALL, 32, devs, &ndev) != CL_SUCCESS) continue;
-        for (cl_uint d = 0; d < ndev && d < 32; d++, seen++) {
+    int rc = enumerate_devices(devs, &n, err);
+    if (rc != PD_OK) return rc;
+    int pick = index;
+    if (index < 0) { /* the first GPU, else the first device */
+        pick = n > 0 ? 0 : -1;
+        for (int i = n - 1; i >= 0; i--) {
             cl_device_type type = 0;
-            clGetDeviceInfo(devs[d], CL_DEVICE_TYPE, sizeof type, &type, NULL);
-            if (!first) {
-                first = devs[d];
-                first_plat = plats[p];
-            }
-            if (!first_gpu && (type & CL_DEVICE_TYPE_GPU)) {
-                first_gpu = devs[d];
-                gpu_plat = plats[p];
-            }
-            if (seen == index) {
-                pick = devs[d];
-                pick_plat = plats[p];
-            }
+            clGetDeviceInfo(devs[i].id, CL_DEVICE_TYPE, sizeof type, &type, NULL);
+            if (type & CL_DEVICE_TYPE_GPU) pick = i;
         }
     }
-    if (index < 0) {
-        pick = first_gpu ? first_gpu : first;
-        pick_plat = first_gpu ? gpu_plat : first_plat;
-    }
-    if (!pick) {
+    if (pick < 0 || pick >= n) {
         if (index >= 0)
             return pd_error_set(err, PD_EINVAL, "opencl: device %d does not exist (%d found)",
-                                index, seen);
+                                index, n);
         return pd_error_set(err, PD_ECL, "opencl: no device found");
     }
+    cl_device_id pickd = devs[pick].id;
+    cl_platform_id pick_plat = devs[pick].platform;
     pd_device *dev = calloc(1, sizeof *dev);
     if (!dev) return pd_error_set(err, PD_ENOMEM, "opencl: out of memory");
     dev->platform = pick_plat;
-    dev->device = pick;
-    clGetDeviceInfo(pick, CL_DEVICE_NAME, sizeof dev->name - 1, dev->name, NULL);
+    dev->device = pickd;
+    clGetDeviceInfo(pickd, CL_DEVICE_NAME, sizeof dev->name - 1, dev->name, NULL);
     char ext[8192] = {0};
-    clGetDeviceInfo(pick, CL_DEVICE_EXTENSIONS, sizeof ext - 1, ext, NULL);
+    clGetDeviceInfo(pickd, CL_DEVICE_EXTENSIONS, sizeof ext - 1, ext, NULL);
     dev->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
-    dev->ctx = clCreateContext(NULL, 1, &pick, NULL, NULL, &e);
+    dev->ctx = clCreateContext(NULL, 1, &pickd, NULL, NULL, &e);
     if (e != CL_SUCCESS) {
         free(dev);
         return CL_FAIL(err, "clCreateContext", e);
     }
-    dev->queue = clCreateCommandQueue(dev->ctx, pick, 0, &e);
+    dev->queue = clCreateCommandQueue(dev->ctx, pickd, 0, &e);
     if (e != CL_SUCCESS) {
         clReleaseContext(dev->ctx);
         free(dev);

@@ -392,6 +392,24 @@ static void parse_interactions(sc_parse *p, json_t *root)
     }
 }
 
+/* Loads the mesh file named by the "mesh" field of the object at `at`, relative to the scenario's
+ * directory; NULL after a diagnostic that quotes the loader's message (file and defect). */
+static pd_mesh *load_mesh_file(sc_parse *p, const char *file, const char *at)
+{
+    char path[4096], c[160];
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    if (file[0] == '/' || !p->base_dir)
+        put(path, sizeof path, "%s", file);
+    else
+        put(path, sizeof path, "%s/%s", p->base_dir, file);
+    if (pd_mesh_load(path, &m, &err) != PD_OK) {
+        child(c, sizeof c, at, "mesh");
+        diag(p, c, "%s", err.msg);
+    }
+    return m;
+}
+
 /* Loads the mesh of one shape object (not a sphere); NULL after a diagnostic. */
 static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
 {
@@ -414,15 +432,7 @@ static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
             diag(p, c, "%s", err.msg);
         }
     } else if (file) {
-        char path[4096];
-        if (file[0] == '/' || !p->base_dir)
-            put(path, sizeof path, "%s", file);
-        else
-            put(path, sizeof path, "%s/%s", p->base_dir, file);
-        if (pd_mesh_load(path, &m, &err) != PD_OK) {
-            child(c, sizeof c, at, "mesh");
-            diag(p, c, "%s", err.msg);
-        }
+        m = load_mesh_file(p, file, at);
     } else {
         json_t *tris = json_object_get(v, "triangles");
         size_t nv = json_is_array(verts) ? json_array_size(verts) : 0;
@@ -780,15 +790,7 @@ static void parse_walls(sc_parse *p, json_t *root)
                 }
             }
         } else {
-            char path[4096];
-            if (file[0] == '/' || !p->base_dir)
-                put(path, sizeof path, "%s", file);
-            else
-                put(path, sizeof path, "%s/%s", p->base_dir, file);
-            if (pd_mesh_load(path, &w->mesh, &err) != PD_OK) {
-                child(c, sizeof c, at, "mesh");
-                diag(p, c, "%s", err.msg);
-            }
+            w->mesh = load_mesh_file(p, file, at);
         }
         numvec(p, v, at, "velocity", 3, zero, w->velocity);
         numvec(p, v, at, "angular_velocity", 3, zero, w->angular_velocity);

@@ -218,40 +218,49 @@ PD_FN int ovl_in_box(const ovl_ctx *c, pd_v3 p)
            p.z >= c->box_lo.z && p.z <= c->box_hi.z;
 }
 
-/* Point-in-B test for A's vertex i: parity of a ray cast along -d against B's kept triangles. */
-PD_FN int ovl_inside_b(ovl_ctx *c, int i)
+/*
+ * Point-in-solid test by ray parity: whether p lies inside B (in_b = 1: p is a vertex of A, the
+ * ray runs along -d) or inside A (in_b = 0: p is a vertex of B, along +d), counting crossings
+ * with the kept triangles of that solid (all the ray can meet, by the half-plane filter). B is the
+ * body displaced by +eps w, so relative to the tested solid p moves by sp eps w with sp = -1 for
+ * A's points and +1 for B's; sp fixes every tie-break below (ovl_side_a/_b, ovl_edge_edge).
+ */
+PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, int in_b)
 {
-    PD_GLOBAL const int *tb = c->in->tb;
-    pd_v3 p = ovl_va(c, i);
-    if (c->filter && c->proj_a[i] < c->e2) return 0; /* below B's half-plane: outside */
-    if (c->filter && !ovl_in_box(c, p)) return 0;    /* outside B's kept part's box */
-    pd_v3 r = v3_scale(c->d, PD_R(-1));
+    PD_GLOBAL const int *tri = in_b ? c->in->tb : c->in->ta;
+    PD_GLOBAL const int *kept = in_b ? c->kept_b : c->kept_a;
+    int nk = in_b ? c->kb : c->ka;
+    pd_real sp = in_b ? PD_R(-1) : PD_R(1);
+    pd_v3 r = v3_scale(c->d, sp);
     pd_v3 rlo, rhi;
-    ovl_ray_box(p, r, c->blo, c->bhi, c->pad, &rlo, &rhi);
+    ovl_ray_box(p, r, in_b ? c->blo : c->alo, in_b ? c->bhi : c->ahi, c->pad, &rlo, &rhi);
     int odd = 0;
-    for (int k = 0; k < c->kb; k++) {
-        int u = c->kept_b[k];
-        int i0 = tb[3 * u], i1 = tb[3 * u + 1], i2 = tb[3 * u + 2];
-        pd_v3 u0 = ovl_vb(c, i0), u1 = ovl_vb(c, i1), u2 = ovl_vb(c, i2);
-        if (c->filter && !ovl_tri_meets(u0, u1, u2, rlo, rhi)) continue;
-        pd_v3 nu = v3_cross(v3_sub(u1, u0), v3_sub(u2, u0));
-        pd_real rn = v3_dot(r, nu);
+    for (int k = 0; k < nk; k++) {
+        int t = kept[k];
+        int idx[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
+        pd_v3 v[3];
+        for (int q = 0; q < 3; q++)
+            v[q] = in_b ? ovl_vb(c, idx[q]) : ovl_va(c, idx[q]);
+        if (c->filter && !ovl_tri_meets(v[0], v[1], v[2], rlo, rhi)) continue;
+        pd_v3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
+        pd_real rn = v3_dot(r, n);
         /* a ray parallel to the plane, to within rounding, never crosses it (exactly parallel
          * it would cross only if it lay in the plane, which the perturbation rules out) */
         if (PD_FABS(rn) <= c->tol2) continue;
-        pd_real q0;
-        int s = ovl_side_a(c, p, u0, nu, &q0);
+        /* side of p: (p - v0) . n with p displaced by sp eps w: eps term sp w . n */
+        int s = ovl_sign(v3_dot(v3_sub(p, v[0]), n), c->tol3);
+        if (!s) s = ovl_tie(c, v3_scale(n, sp));
         if ((s > 0) != (rn < PD_R(0))) continue; /* plane behind the ray's start */
-        int idx[3] = {i0, i1, i2};
         int sg[3] = {0, 0, 0};
         for (int e = 0; e < 3; e++) {
             if (e > 0 && sg[e - 1] != sg[0]) break; /* turns differ: the ray misses */
             int k0 = idx[e], k1 = idx[(e + 1) % 3];
             int lo = k0 < k1 ? k0 : k1, hi = k0 < k1 ? k1 : k0;
-            pd_v3 b0 = ovl_vb(c, lo), b1 = ovl_vb(c, hi);
-            /* det(r, b0 - q, b1 - q) for q = p - eps w: eps term w . ((b1 - b0) x r) */
+            pd_v3 b0 = in_b ? ovl_vb(c, lo) : ovl_va(c, lo);
+            pd_v3 b1 = in_b ? ovl_vb(c, hi) : ovl_va(c, hi);
+            /* det(r, b0 - q, b1 - q) for q = p + sp eps w: eps term -sp w . ((b1 - b0) x r) */
             int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), v3_sub(b1, p)), c->tol2);
-            if (!sv) sv = ovl_tie(c, v3_cross(v3_sub(b1, b0), r));
+            if (!sv) sv = ovl_tie(c, v3_scale(v3_cross(v3_sub(b1, b0), r), -sp));
             sg[e] = k0 < k1 ? sv : -sv;
         }
         if (sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2]) odd ^= 1;
@@ -259,44 +268,22 @@ PD_FN int ovl_inside_b(ovl_ctx *c, int i)
     return odd;
 }
 
-/* Point-in-A test for B's vertex j: ray along +d against A's kept triangles. */
+/* Point-in-B test for A's vertex i. */
+PD_FN int ovl_inside_b(ovl_ctx *c, int i)
+{
+    pd_v3 p = ovl_va(c, i);
+    if (c->filter && c->proj_a[i] < c->e2) return 0; /* below B's half-plane: outside */
+    if (c->filter && !ovl_in_box(c, p)) return 0;    /* outside the box where A n B lies */
+    return ovl_ray_parity(c, p, 1);
+}
+
+/* Point-in-A test for B's vertex j. */
 PD_FN int ovl_inside_a(ovl_ctx *c, int j)
 {
-    PD_GLOBAL const int *ta = c->in->ta;
     pd_v3 u = ovl_vb(c, j);
     if (c->filter && c->proj_b[j] > c->e1) return 0; /* above A's half-plane: outside */
     if (c->filter && !ovl_in_box(c, u)) return 0;
-
-    pd_v3 r = c->d;
-    pd_v3 rlo, rhi;
-    ovl_ray_box(u, r, c->alo, c->ahi, c->pad, &rlo, &rhi);
-    int odd = 0;
-    for (int k = 0; k < c->ka; k++) {
-        int t = c->kept_a[k];
-        int i0 = ta[3 * t], i1 = ta[3 * t + 1], i2 = ta[3 * t + 2];
-        pd_v3 t0 = ovl_va(c, i0), t1 = ovl_va(c, i1), t2 = ovl_va(c, i2);
-        if (c->filter && !ovl_tri_meets(t0, t1, t2, rlo, rhi)) continue;
-        pd_v3 nt = v3_cross(v3_sub(t1, t0), v3_sub(t2, t0));
-        pd_real rn = v3_dot(r, nt);
-        if (PD_FABS(rn) <= c->tol2) continue; /* parallel */
-        pd_real q0;
-        int s = ovl_side_b(c, u, t0, nt, &q0);
-        if ((s > 0) != (rn < PD_R(0))) continue;
-        int idx[3] = {i0, i1, i2};
-        int sg[3] = {0, 0, 0};
-        for (int e = 0; e < 3; e++) {
-            if (e > 0 && sg[e - 1] != sg[0]) break;
-            int k0 = idx[e], k1 = idx[(e + 1) % 3];
-            int lo = k0 < k1 ? k0 : k1, hi = k0 < k1 ? k1 : k0;
-            pd_v3 a0 = ovl_va(c, lo), a1 = ovl_va(c, hi);
-            /* det(r, a0 - q, a1 - q) for q = u + eps w: eps term -w . ((a1 - a0) x r) */
-            int sv = ovl_sign(ovl_det(r, v3_sub(a0, u), v3_sub(a1, u)), c->tol2);
-            if (!sv) sv = ovl_tie(c, v3_scale(v3_cross(v3_sub(a1, a0), r), PD_R(-1)));
-            sg[e] = k0 < k1 ? sv : -sv;
-        }
-        if (sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2]) odd ^= 1;
-    }
-    return odd;
+    return ovl_ray_parity(c, u, 0);
 }
 
 #endif /* PD_OVERLAP_PREDICATES_H */
