@@ -107,6 +107,7 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
     for (int i = 0; i < n; i++) {
         ovl_setup *s = &cf->s[i];
         in[i].va = s->va;
+        in[i].sa = 1;
         in[i].ta = s->ta;
         in[i].nva = s->nva;
         in[i].nta = s->nta;

@@ -20,6 +20,7 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
     __global const pd_real *x = xf + 18 * g;
     ovl_in in;
     in.va = va;
+    in.sa = PD_R(1);
     in.ta = ta;
     in.nva = nva;
     in.nta = nta;

@@ -393,7 +393,8 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->st_b = c->st_a + in->nva;
     c->proj_a = in->rscr;
     c->proj_b = in->rscr + in->nva;
-    c->vbt = c->proj_b + in->nvb;
+    c->vat = c->proj_b + in->nvb;
+    c->vbt = c->vat + 3 * in->nva;
     c->pts = c->vbt + 3 * in->nvb;
     c->ucache = c->pts + 3 * in->pts_cap;
     c->npts = c->pts_overflow = 0;
@@ -416,8 +417,9 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->e1 = -PD_REAL_MAX;
     c->e2 = PD_REAL_MAX;
     pd_real scale = PD_R(0);
+    pd_v3 da = v3_scale(d, in->sa);
     for (int i = 0; i < in->nva; i++) {
-        c->proj_a[i] = v3_dot(v3_load(in->va, i), d);
+        c->proj_a[i] = v3_dot(v3_load(in->va, i), da); /* = (sa v) . d, for the padded filter */
         if (c->proj_a[i] > c->e1) c->e1 = c->proj_a[i];
         if (PD_FABS(c->proj_a[i]) > scale) scale = PD_FABS(c->proj_a[i]);
         c->st_a[i] = 0;
@@ -489,7 +491,9 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     for (int k = 0; k < c->ka; k++) {
         PD_GLOBAL const int *v = in->ta + 3 * c->kept_a[k];
         for (int q = 0; q < 3; q++) {
-            pd_v3 x = v3_load(in->va, v[q]);
+            /* A's kept corners, scaled once (a corner may be stored more than once: same value) */
+            pd_v3 x = v3_scale(v3_load(in->va, v[q]), in->sa);
+            v3_store(c->vat, v[q], x);
             alo = v3(pd_min(alo.x, x.x), pd_min(alo.y, x.y), pd_min(alo.z, x.z));
             ahi = v3(pd_max(ahi.x, x.x), pd_max(ahi.y, x.y), pd_max(ahi.z, x.z));
         }
@@ -540,8 +544,8 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     for (int k = 0; k < c->ka; k++) {
         int t = c->kept_a[k];
         ovl_tri T;
-        ovl_tri_make(&T, v3_load(in->va, in->ta[3 * t]), v3_load(in->va, in->ta[3 * t + 1]),
-                     v3_load(in->va, in->ta[3 * t + 2]), PD_R(0));
+        ovl_tri_make(&T, ovl_va(c, in->ta[3 * t]), ovl_va(c, in->ta[3 * t + 1]),
+                     ovl_va(c, in->ta[3 * t + 2]), PD_R(0));
         if (!c->filter || ovl_box_meets(c, &T)) c->near_a[c->na++] = t;
     }
     for (int l = 0; l < c->kb; l++) {

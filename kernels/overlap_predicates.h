@@ -35,7 +35,8 @@
 
 /* Input of one overlap computation. Scratch sizes: see ovl_iscratch_len / ovl_rscratch_len. */
 typedef struct ovl_in {
-    PD_GLOBAL const pd_real *va; /* A's vertices, xyz, in A's frame */
+    PD_GLOBAL const pd_real *va; /* A's vertices, xyz, in A's frame, times sa */
+    pd_real sa;                  /* scale of A's vertices (a particle's size; 1 for a mesh as is) */
     PD_GLOBAL const int *ta;     /* A's triangles, outward counter-clockwise */
     int nva, nta;
     PD_GLOBAL const pd_real *vb; /* B's vertices in B's own frame */
@@ -45,7 +46,7 @@ typedef struct ovl_in {
      * vt[vt_off[i] .. vt_off[i+1]-1]); with them the filter visits only the triangles of the
      * vertices that reach into the other's half-plane; NULL: it classifies every triangle */
     PD_GLOBAL const int *vt_a_off, *vt_a, *vt_b_off, *vt_b;
-    pd_real rot[9]; /* B's frame -> A's frame, row-major: p = rot * v + tr */
+    pd_real rot[9]; /* B's frame -> A's frame, row-major: p = rot * v + tr (B's scale in rot) */
     pd_real tr[3];
     pd_v3 ca, cb;         /* centroids of A and B in A's frame (filter direction, eq. 5.3) */
     pd_real vol_a, vol_b; /* mesh volumes; set the "no overlap" threshold */
@@ -72,7 +73,7 @@ PD_FN int ovl_iscratch_len(int nta, int ntb, int nva, int nvb)
 }
 PD_FN int ovl_rscratch_len(int nva, int nvb, int ntb, int pts_cap)
 {
-    return nva + nvb + 3 * nvb + 3 * pts_cap + OVL_TRI_CACHE * ntb;
+    return nva + nvb + 3 * nva + 3 * nvb + 3 * pts_cap + OVL_TRI_CACHE * ntb;
 }
 
 /* Vertex state bits (per pass). */
@@ -90,7 +91,7 @@ typedef struct ovl_ctx {
     PD_GLOBAL int *kept_a, *kept_b, *near_a, *near_b, *st_a, *st_b;
     pd_v3 box_lo, box_hi;     /* box of A's kept part n box of B's kept part, padded */
     pd_v3 alo, ahi, blo, bhi; /* boxes of A's and B's kept parts, padded */
-    PD_GLOBAL pd_real *proj_a, *proj_b, *vbt, *pts, *ucache;
+    PD_GLOBAL pd_real *proj_a, *proj_b, *vat, *vbt, *pts, *ucache;
     int npts, pts_overflow, store_pts;
     pd_real pad;        /* OVL_SNAP * L: the configuration's length resolution */
     pd_real tol2, tol3; /* snap bounds for determinants of length^2 and length^3 */
@@ -144,7 +145,7 @@ PD_FN int ovl_tie(ovl_ctx *c, pd_v3 g)
 
 PD_FN pd_v3 ovl_va(const ovl_ctx *c, int i)
 {
-    return v3_load(c->in->va, i);
+    return v3_load(c->vat, i); /* scaled by sa once, for the kept triangles' corners */
 }
 PD_FN pd_v3 ovl_vb(const ovl_ctx *c, int j)
 {
@@ -219,45 +220,41 @@ PD_FN int ovl_in_box(const ovl_ctx *c, pd_v3 p)
 }
 
 /*
- * Point-in-solid test by ray parity: whether p lies inside B (in_b = 1: p is a vertex of A, the
- * ray runs along -d) or inside A (in_b = 0: p is a vertex of B, along +d), counting crossings
- * with the kept triangles of that solid (all the ray can meet, by the half-plane filter). B is the
- * body displaced by +eps w, so relative to the tested solid p moves by sp eps w with sp = -1 for
- * A's points and +1 for B's; sp fixes every tie-break below (ovl_side_a/_b, ovl_edge_edge).
+ * Point-in-solid test by ray parity: whether p lies inside the solid whose kept triangles are
+ * tri[kept[0..nk)] over vertices vx (A's frame) and whose kept part lies in the box [lo, hi],
+ * counting crossings of the ray from p along sp d (all it can meet are kept, by the half-plane
+ * filter). B is the body displaced by +eps w, so relative to the tested solid p moves by
+ * sp eps w: sp = -1 for A's points tested against B, +1 for B's against A; sp fixes every
+ * tie-break below as in ovl_side_a/_b.
  */
-PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, int in_b)
+PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, PD_GLOBAL const int *tri, PD_GLOBAL const int *kept,
+                         int nk, PD_GLOBAL const pd_real *vx, pd_real sp, pd_v3 lo, pd_v3 hi)
 {
-    PD_GLOBAL const int *tri = in_b ? c->in->tb : c->in->ta;
-    PD_GLOBAL const int *kept = in_b ? c->kept_b : c->kept_a;
-    int nk = in_b ? c->kb : c->ka;
-    pd_real sp = in_b ? PD_R(-1) : PD_R(1);
     pd_v3 r = v3_scale(c->d, sp);
     pd_v3 rlo, rhi;
-    ovl_ray_box(p, r, in_b ? c->blo : c->alo, in_b ? c->bhi : c->ahi, c->pad, &rlo, &rhi);
+    ovl_ray_box(p, r, lo, hi, c->pad, &rlo, &rhi);
     int odd = 0;
     for (int k = 0; k < nk; k++) {
         int t = kept[k];
-        int idx[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
-        pd_v3 v[3];
-        for (int q = 0; q < 3; q++)
-            v[q] = in_b ? ovl_vb(c, idx[q]) : ovl_va(c, idx[q]);
-        if (c->filter && !ovl_tri_meets(v[0], v[1], v[2], rlo, rhi)) continue;
-        pd_v3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
+        int i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
+        pd_v3 v0 = v3_load(vx, i0), v1 = v3_load(vx, i1), v2 = v3_load(vx, i2);
+        if (c->filter && !ovl_tri_meets(v0, v1, v2, rlo, rhi)) continue;
+        pd_v3 n = v3_cross(v3_sub(v1, v0), v3_sub(v2, v0));
         pd_real rn = v3_dot(r, n);
         /* a ray parallel to the plane, to within rounding, never crosses it (exactly parallel
          * it would cross only if it lay in the plane, which the perturbation rules out) */
         if (PD_FABS(rn) <= c->tol2) continue;
         /* side of p: (p - v0) . n with p displaced by sp eps w: eps term sp w . n */
-        int s = ovl_sign(v3_dot(v3_sub(p, v[0]), n), c->tol3);
+        int s = ovl_sign(v3_dot(v3_sub(p, v0), n), c->tol3);
         if (!s) s = ovl_tie(c, v3_scale(n, sp));
         if ((s > 0) != (rn < PD_R(0))) continue; /* plane behind the ray's start */
+        int idx[3] = {i0, i1, i2};
         int sg[3] = {0, 0, 0};
         for (int e = 0; e < 3; e++) {
             if (e > 0 && sg[e - 1] != sg[0]) break; /* turns differ: the ray misses */
             int k0 = idx[e], k1 = idx[(e + 1) % 3];
             int lo = k0 < k1 ? k0 : k1, hi = k0 < k1 ? k1 : k0;
-            pd_v3 b0 = in_b ? ovl_vb(c, lo) : ovl_va(c, lo);
-            pd_v3 b1 = in_b ? ovl_vb(c, hi) : ovl_va(c, hi);
+            pd_v3 b0 = v3_load(vx, lo), b1 = v3_load(vx, hi);
             /* det(r, b0 - q, b1 - q) for q = p + sp eps w: eps term -sp w . ((b1 - b0) x r) */
             int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), v3_sub(b1, p)), c->tol2);
             if (!sv) sv = ovl_tie(c, v3_scale(v3_cross(v3_sub(b1, b0), r), -sp));
@@ -274,7 +271,7 @@ PD_FN int ovl_inside_b(ovl_ctx *c, int i)
     pd_v3 p = ovl_va(c, i);
     if (c->filter && c->proj_a[i] < c->e2) return 0; /* below B's half-plane: outside */
     if (c->filter && !ovl_in_box(c, p)) return 0;    /* outside the box where A n B lies */
-    return ovl_ray_parity(c, p, 1);
+    return ovl_ray_parity(c, p, c->in->tb, c->kept_b, c->kb, c->vbt, PD_R(-1), c->blo, c->bhi);
 }
 
 /* Point-in-A test for B's vertex j. */
@@ -283,7 +280,7 @@ PD_FN int ovl_inside_a(ovl_ctx *c, int j)
     pd_v3 u = ovl_vb(c, j);
     if (c->filter && c->proj_b[j] > c->e1) return 0; /* above A's half-plane: outside */
     if (c->filter && !ovl_in_box(c, u)) return 0;
-    return ovl_ray_parity(c, u, 0);
+    return ovl_ray_parity(c, u, c->in->ta, c->kept_a, c->ka, c->vat, PD_R(1), c->alo, c->ahi);
 }
 
 #endif /* PD_OVERLAP_PREDICATES_H */
