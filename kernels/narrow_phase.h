@@ -1,0 +1,101 @@
+/*
+ * narrow_phase.h - the narrow phase of the pipeline (thesis section 5.2-5.3): one candidate pair
+ * of particles, each a shape (a mesh in its body frame at size 1) scaled by its size and placed by
+ * its pose, turned into an overlap problem (kernels/overlap.h) in the first particle's body frame
+ * (figure 5.4) and its answer turned back into world coordinates. Shared by OpenCL and host C.
+ *
+ * Shapes are concatenated: shape s has vertices vert[3 voff[s] ..], triangles tri[3 toff[s] ..]
+ * with indices local to the shape, the vertex -> triangle table vt_off[voff[s] + s ..] (nv + 1
+ * entries, local) over vt[3 toff[s] ..], and unit_vol[s] its volume at size 1.
+ */
+#ifndef PD_NARROW_PHASE_H
+#define PD_NARROW_PHASE_H
+
+#include "overlap.h"
+
+typedef struct np_shapes {
+    PD_GLOBAL const pd_real *vert;
+    PD_GLOBAL const int *tri, *voff, *toff, *vt_off, *vt;
+    PD_GLOBAL const pd_real *unit_vol;
+} np_shapes;
+
+/* Pose of one particle: position (m), orientation [w, x, y, z] (unit), size (m), shape index. */
+typedef struct np_body {
+    pd_v3 x;
+    pd_real q[4];
+    pd_real size;
+    int shape;
+} np_body;
+
+/* Row-major rotation matrix of a unit quaternion. */
+PD_FN void np_quat_matrix(const pd_real q[4], pd_real r[9])
+{
+    pd_real w = q[0], x = q[1], y = q[2], z = q[3];
+    r[0] = 1 - 2 * (y * y + z * z);
+    r[1] = 2 * (x * y - w * z);
+    r[2] = 2 * (x * z + w * y);
+    r[3] = 2 * (x * y + w * z);
+    r[4] = 1 - 2 * (x * x + z * z);
+    r[5] = 2 * (y * z - w * x);
+    r[6] = 2 * (x * z - w * y);
+    r[7] = 2 * (y * z + w * x);
+    r[8] = 1 - 2 * (x * x + y * y);
+}
+
+/*
+ * Fills in (all but the scratch) for the pair (a, b): A's frame is a's body frame, B is mapped
+ * by rot = size_b R(conj(q_a) q_b) and tr = R(q_a)^T (x_b - x_a). The relative quaternion's
+ * terms are paired so that equal orientations give exactly the identity (aligned shapes stay
+ * exactly degenerate, see overlap_predicates.h). ra receives R(q_a) for np_to_world.
+ */
+PD_FN void np_setup(const np_shapes *sh, const np_body *a, const np_body *b, int flags, ovl_in *in,
+                    pd_real ra[9])
+{
+    int sa = a->shape, sb = b->shape;
+    in->va = sh->vert + 3 * sh->voff[sa];
+    in->ta = sh->tri + 3 * sh->toff[sa];
+    in->nva = sh->voff[sa + 1] - sh->voff[sa];
+    in->nta = sh->toff[sa + 1] - sh->toff[sa];
+    in->vt_a_off = sh->vt_off + sh->voff[sa] + sa;
+    in->vt_a = sh->vt + 3 * sh->toff[sa];
+    in->vb = sh->vert + 3 * sh->voff[sb];
+    in->tb = sh->tri + 3 * sh->toff[sb];
+    in->nvb = sh->voff[sb + 1] - sh->voff[sb];
+    in->ntb = sh->toff[sb + 1] - sh->toff[sb];
+    in->vt_b_off = sh->vt_off + sh->voff[sb] + sb;
+    in->vt_b = sh->vt + 3 * sh->toff[sb];
+    in->sa = a->size;
+    const pd_real *qa = a->q, *qb = b->q;
+    pd_real qr[4];
+    qr[0] = qa[0] * qb[0] + qa[1] * qb[1] + qa[2] * qb[2] + qa[3] * qb[3];
+    qr[1] = (qa[0] * qb[1] - qa[1] * qb[0]) + (qa[3] * qb[2] - qa[2] * qb[3]);
+    qr[2] = (qa[0] * qb[2] - qa[2] * qb[0]) + (qa[1] * qb[3] - qa[3] * qb[1]);
+    qr[3] = (qa[0] * qb[3] - qa[3] * qb[0]) + (qa[2] * qb[1] - qa[1] * qb[2]);
+    pd_real rr[9];
+    np_quat_matrix(qr, rr);
+    np_quat_matrix(qa, ra);
+    for (int k = 0; k < 9; k++)
+        in->rot[k] = rr[k] * b->size;
+    pd_v3 dx = v3_sub(b->x, a->x);
+    in->tr[0] = ra[0] * dx.x + ra[3] * dx.y + ra[6] * dx.z;
+    in->tr[1] = ra[1] * dx.x + ra[4] * dx.y + ra[7] * dx.z;
+    in->tr[2] = ra[2] * dx.x + ra[5] * dx.y + ra[8] * dx.z;
+    in->ca = v3(0, 0, 0); /* body frames have the centroid at the origin */
+    in->cb = v3(in->tr[0], in->tr[1], in->tr[2]);
+    in->vol_a = sh->unit_vol[sa] * a->size * a->size * a->size;
+    in->vol_b = sh->unit_vol[sb] * b->size * b->size * b->size;
+    in->flags = flags;
+}
+
+/* The overlap's centroid and normal from a's body frame to world coordinates. */
+PD_FN void np_to_world(const np_body *a, const pd_real ra[9], ovl_out *o)
+{
+    pd_v3 c = o->centroid, n = o->normal;
+    o->centroid = v3(ra[0] * c.x + ra[1] * c.y + ra[2] * c.z + a->x.x,
+                     ra[3] * c.x + ra[4] * c.y + ra[5] * c.z + a->x.y,
+                     ra[6] * c.x + ra[7] * c.y + ra[8] * c.z + a->x.z);
+    o->normal = v3(ra[0] * n.x + ra[1] * n.y + ra[2] * n.z, ra[3] * n.x + ra[4] * n.y + ra[5] * n.z,
+                   ra[6] * n.x + ra[7] * n.y + ra[8] * n.z);
+}
+
+#endif /* PD_NARROW_PHASE_H */
