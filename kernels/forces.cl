@@ -2,9 +2,12 @@
  * forces.cl - per-contact force evaluation (the forces stage), one work-item per contact.
  * Built with -DPD_DOUBLE=0 or 1. hertz_volume_normal: for each contact, the normal force of
  * thesis eq. 4.16 from (V, delta, E*, m*, gamma, vn) packed as 6 reals; writes F_n and k_n.
+ * gather_forces: per particle, the deterministic sum of its contacts' forces and torques
+ * (kernels/contact_history.h), written as 3 + 3 reals.
  */
 #include "pd_real.h"
 #include "contact_force.h"
+#include "contact_history.h"
 
 __kernel void hertz_volume_normal(__global const pd_real *in, int n, __global pd_real *out)
 {
@@ -14,4 +17,18 @@ __kernel void hertz_volume_normal(__global const pd_real *in, int n, __global pd
     pd_real kn;
     out[2 * g] = cf_hertz_volume_normal(c[2], c[0], c[1], c[3], c[4], c[5], &kn);
     out[2 * g + 1] = kn;
+}
+
+__kernel void gather_forces(__global const ch_key *keys, __global const int *by_second,
+                            __global const ch_key *swapped, int ncontacts,
+                            __global const pd_real *force, __global const pd_real *tq_first,
+                            __global const pd_real *tq_second, int nparticles,
+                            __global pd_real *f_out, __global pd_real *t_out)
+{
+    int p = (int)get_global_id(0);
+    if (p >= nparticles) return;
+    pd_v3 f, t;
+    ch_gather((unsigned)p, keys, by_second, swapped, ncontacts, force, tq_first, tq_second, &f, &t);
+    v3_store(f_out, p, f);
+    v3_store(t_out, p, t);
 }

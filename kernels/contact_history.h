@@ -1,0 +1,103 @@
+/*
+ * contact_history.h - the per-pair state carried between steps (the tangential spring of thesis
+ * eqs. 4.8-4.9) and the deterministic per-particle sum of contact forces, shared by OpenCL and
+ * host C (see pd_real.h).
+ *
+ * A contact is named by a 64-bit key: first body in the high half, second in the low half, so the
+ * contacts of one step sorted by key are grouped by first body. Walls are second bodies numbered
+ * from CH_WALL up. A new contact finds its predecessor by binary search in the previous step's
+ * sorted keys: no hashing, no atomics, the same answer on every device.
+ *
+ * Forces are summed per particle in a fixed order (its contacts as first body in key order, then
+ * as second body in the order of the key with the bodies swapped), never with floating-point
+ * atomics, so a run is bit-identical from run to run on one device (issue 3, stage 6).
+ */
+#ifndef PD_CONTACT_HISTORY_H
+#define PD_CONTACT_HISTORY_H
+
+#include "pd_real.h"
+
+#ifdef __OPENCL_VERSION__
+typedef ulong ch_key;
+#else
+#include <stdint.h>
+typedef uint64_t ch_key;
+#endif
+
+#define CH_WALL 0x80000000u /* second bodies from here up are walls */
+
+PD_FN ch_key ch_make(unsigned a, unsigned b)
+{
+    return (ch_key)a << 32 | (ch_key)b;
+}
+PD_FN unsigned ch_first(ch_key k)
+{
+    return (unsigned)(k >> 32);
+}
+PD_FN unsigned ch_second(ch_key k)
+{
+    return (unsigned)(k & 0xffffffffu);
+}
+
+/* First position in sorted keys[0..n) whose key is >= k. */
+PD_FN int ch_lower_bound(PD_GLOBAL const ch_key *keys, int n, ch_key k)
+{
+    int lo = 0, hi = n;
+    while (lo < hi) {
+        int mid = lo + (hi - lo) / 2;
+        if (keys[mid] < k)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+/* Position of k in sorted keys[0..n), or -1: where a contact's last-step state is. */
+PD_FN int ch_find(PD_GLOBAL const ch_key *keys, int n, ch_key k)
+{
+    int i = ch_lower_bound(keys, n, k);
+    return i < n && keys[i] == k ? i : -1;
+}
+
+/*
+ * Carries contact i's tangential spring (3 reals) and stiffness from the last step's arrays, or
+ * starts it at zero for a new contact.
+ */
+PD_FN void ch_carry(PD_GLOBAL const ch_key *old_keys, int n_old,
+                    PD_GLOBAL const pd_real *old_spring, PD_GLOBAL const pd_real *old_kt, ch_key k,
+                    PD_GLOBAL pd_real *spring, PD_GLOBAL pd_real *kt, int i)
+{
+    int j = ch_find(old_keys, n_old, k);
+    for (int c = 0; c < 3; c++)
+        spring[3 * i + c] = j >= 0 ? old_spring[3 * j + c] : PD_R(0);
+    kt[i] = j >= 0 ? old_kt[j] : PD_R(0);
+}
+
+/*
+ * Sum over particle p's contacts of the force and torque on p. keys[0..n) are the contacts sorted
+ * by key; by_second[0..n) lists contact indices sorted by the swapped key (second body, first
+ * body), with swapped[] those swapped keys. Contact c carries force[3c] acting on its second body
+ * (the first body gets minus it) and torques tq_first[3c], tq_second[3c] about each body's centre.
+ */
+PD_FN void ch_gather(unsigned p, PD_GLOBAL const ch_key *keys, PD_GLOBAL const int *by_second,
+                     PD_GLOBAL const ch_key *swapped, int n, PD_GLOBAL const pd_real *force,
+                     PD_GLOBAL const pd_real *tq_first, PD_GLOBAL const pd_real *tq_second,
+                     pd_v3 *f_out, pd_v3 *t_out)
+{
+    pd_v3 f = v3(0, 0, 0), t = v3(0, 0, 0);
+    for (int c = ch_lower_bound(keys, n, ch_make(p, 0)); c < n && ch_first(keys[c]) == p; c++) {
+        f = v3_sub(f, v3_load(force, c));
+        t = v3_add(t, v3_load(tq_first, c));
+    }
+    for (int s = ch_lower_bound(swapped, n, ch_make(p, 0)); s < n && ch_first(swapped[s]) == p;
+         s++) {
+        int c = by_second[s];
+        f = v3_add(f, v3_load(force, c));
+        t = v3_add(t, v3_load(tq_second, c));
+    }
+    *f_out = f;
+    *t_out = t;
+}
+
+#endif /* PD_CONTACT_HISTORY_H */
