@@ -435,3 +435,116 @@ int pd_overlap_cl(pd_device *dev, const pd_mesh *a, const pd_pose *pa, const pd_
     ovl_setup_free(&s);
     return rc;
 }
+
+int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double *q,
+              const double *size, const int *shape, int nbody, const int *pairs, int npairs,
+              int dbl, double *out, pd_error *err)
+{
+    if (dbl && !dev->fp64)
+        return pd_error_set(err, PD_ECL, "opencl: device '%s' has no cl_khr_fp64", dev->name);
+    cl_program prog;
+    int rc = build_program(dev, "narrow", pd_cl_source_narrow, dbl, &prog, err);
+    if (rc != PD_OK) return rc;
+    int nv = t->voff[t->nshape], nt = t->toff[t->nshape], maxv = 0, maxt = 0;
+    for (int s = 0; s < t->nshape; s++) {
+        int v = t->voff[s + 1] - t->voff[s], tr = t->toff[s + 1] - t->toff[s];
+        maxv = v > maxv ? v : maxv;
+        maxt = tr > maxt ? tr : maxt;
+    }
+    int cap = ovl_pts_cap(maxt, maxt);
+    ovl_setup big; /* scratch lengths depend only on the largest shape */
+    memset(&big, 0, sizeof big);
+    big.nva = big.nvb = maxv;
+    big.nta = big.ntb = maxt;
+    size_t ilen, rlen;
+    ovl_scratch_len(&big, &ilen, &rlen);
+    size_t rs = dbl ? sizeof(double) : sizeof(float);
+    /* real-valued inputs converted to the device's scalar */
+    const double *src[5] = {x, q, size, t->vert, t->unit_vol};
+    size_t len[5] = {3 * (size_t)nbody, 4 * (size_t)nbody, (size_t)nbody, 3 * (size_t)nv,
+                     (size_t)t->nshape};
+    void *host[5] = {0};
+    cl_mem b[14] = {0};
+    cl_kernel k = NULL;
+    cl_int e = CL_SUCCESS;
+    void *hout = malloc(rs * 12 * (size_t)npairs);
+    rc = PD_OK;
+    for (int i = 0; i < 5; i++) {
+        host[i] = malloc(rs * (len[i] ? len[i] : 1));
+        if (!host[i])
+            rc = PD_ENOMEM;
+        else
+            to_real(host[i], src[i], len[i], dbl);
+    }
+    if (rc != PD_OK || !hout) {
+        rc = pd_error_set(err, PD_ENOMEM, "opencl narrow phase: out of memory");
+        goto done;
+    }
+    const cl_mem_flags ro = CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR;
+    b[0] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 2 * npairs, (void *)pairs, &e);
+    for (int i = 0; i < 3 && e == CL_SUCCESS; i++) /* x, q, size */
+        b[1 + i] = clCreateBuffer(dev->ctx, ro, rs * len[i], host[i], &e);
+    if (e == CL_SUCCESS)
+        b[4] = clCreateBuffer(dev->ctx, ro, sizeof(int) * nbody, (void *)shape, &e);
+    if (e == CL_SUCCESS) b[5] = clCreateBuffer(dev->ctx, ro, rs * len[3], host[3], &e);
+    if (e == CL_SUCCESS)
+        b[6] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * nt, (void *)t->tri, &e);
+    if (e == CL_SUCCESS)
+        b[7] = clCreateBuffer(dev->ctx, ro, sizeof(int) * (t->nshape + 1), (void *)t->voff, &e);
+    if (e == CL_SUCCESS)
+        b[8] = clCreateBuffer(dev->ctx, ro, sizeof(int) * (t->nshape + 1), (void *)t->toff, &e);
+    if (e == CL_SUCCESS)
+        b[9] = clCreateBuffer(dev->ctx, ro, sizeof(int) * (nv + t->nshape), (void *)t->vt_off, &e);
+    if (e == CL_SUCCESS)
+        b[10] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * nt, (void *)t->vt, &e);
+    if (e == CL_SUCCESS) b[11] = clCreateBuffer(dev->ctx, ro, rs * len[4], host[4], &e);
+    if (e == CL_SUCCESS)
+        b[12] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);
+    if (e == CL_SUCCESS)
+        b[13] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, rs * rlen * npairs, NULL, &e);
+    cl_mem bout = NULL;
+    if (e == CL_SUCCESS)
+        bout = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * 12 * npairs, NULL, &e);
+    if (e == CL_SUCCESS) k = clCreateKernel(prog, "narrow_phase", &e);
+    if (e != CL_SUCCESS) {
+        if (bout) clReleaseMemObject(bout);
+        rc = CL_FAIL(err, "narrow phase set-up", e);
+        goto done;
+    }
+    int flags = 0, il = (int)ilen, rl = (int)rlen, ai = 0;
+    cl_int ae = CL_SUCCESS;
+    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[0]);
+    ae |= clSetKernelArg(k, ai++, sizeof(int), &npairs);
+    for (int i = 1; i <= 11; i++)
+        ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[i]);
+    ae |= clSetKernelArg(k, ai++, sizeof(int), &flags);
+    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[12]);
+    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[13]);
+    ae |= clSetKernelArg(k, ai++, sizeof(int), &il);
+    ae |= clSetKernelArg(k, ai++, sizeof(int), &rl);
+    ae |= clSetKernelArg(k, ai++, sizeof(int), &cap);
+    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &bout);
+    size_t global = (size_t)npairs;
+    if (ae == CL_SUCCESS)
+        e = clEnqueueNDRangeKernel(dev->queue, k, 1, NULL, &global, NULL, 0, NULL, NULL);
+    if (ae == CL_SUCCESS && e == CL_SUCCESS)
+        e = clEnqueueReadBuffer(dev->queue, bout, CL_TRUE, 0, rs * 12 * npairs, hout, 0, NULL,
+                                NULL);
+    clReleaseMemObject(bout);
+    if (ae != CL_SUCCESS || e != CL_SUCCESS) {
+        rc = ae != CL_SUCCESS ? pd_error_set(err, PD_ECL, "opencl: narrow_phase arguments")
+                              : CL_FAIL(err, "narrow_phase", e);
+        goto done;
+    }
+    for (size_t i = 0; i < 12 * (size_t)npairs; i++)
+        out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
+done:
+    for (int i = 0; i < 14; i++)
+        if (b[i]) clReleaseMemObject(b[i]);
+    for (int i = 0; i < 5; i++)
+        free(host[i]);
+    free(hout);
+    if (k) clReleaseKernel(k);
+    clReleaseProgram(prog);
+    return rc;
+}

@@ -59,6 +59,24 @@ void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *ou
 int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs, int dbl,
                double *out, pd_error *err);
 void ovl_setup_pack(const ovl_setup *s, double xf[18]);
+
+/*
+ * Shapes for the narrow phase (kernels/narrow_phase.h), in doubles: nshape shapes concatenated,
+ * vertex and triangle offsets voff/toff (nshape + 1), vertex -> triangle tables vt_off/vt.
+ */
+typedef struct np_tables {
+    int nshape;
+    const double *vert, *unit_vol;
+    const int *tri, *voff, *toff, *vt_off, *vt;
+} np_tables;
+
+/*
+ * Runs the narrow-phase kernel (kernels/narrow.cl) for npairs pairs of nbody particles (x 3n,
+ * q 4n, size n, shape n) on dev; out receives 12 doubles per pair as the kernel writes them.
+ */
+int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double *q,
+              const double *size, const int *shape, int nbody, const int *pairs, int npairs,
+              int dbl, double *out, pd_error *err);
 void ovl_result_unpack(const double r[12], ovl_result *o);
 
 #endif

@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "narrow_phase.h"
+#include "overlap_run.h"
 #include "polydem.h"
 #include "test.h"
 
@@ -98,7 +99,9 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
     int cap = 1024, rlen = ovl_rscratch_len(voff[NSHAPE], voff[NSHAPE], toff[NSHAPE], cap);
     int *iscr = malloc(sizeof(int) * ilen);
     double *rscr = malloc(sizeof(double) * rlen);
-    int hits = 0, checked = 0;
+    int hits = 0, checked = 0, npairs = 0;
+    int pairs[2 * NBODY * NBODY];
+    double host[12 * NBODY * NBODY];
     for (int i = 0; i < NBODY; i++)
         for (int j = i + 1; j < NBODY; j++) {
             ovl_in in;
@@ -110,6 +113,12 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
             ovl_out o;
             ovl_compute(&in, &o);
             np_to_world(&b[i], ra, &o);
+            pairs[2 * npairs] = i;
+            pairs[2 * npairs + 1] = j;
+            double h[12] = {o.hit,      o.degenerate, o.kept_a,     o.kept_b,
+                            o.volume,   o.centroid.x, o.centroid.y, o.centroid.z,
+                            o.normal.x, o.normal.y,   o.normal.z,   o.depth};
+            memcpy(host + 12 * npairs++, h, sizeof h);
             /* reference: the meshes scaled by size, posed by (x, q) */
             pd_mesh *ma = NULL, *mb = NULL;
             pd_error err = {0};
@@ -146,6 +155,36 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
         }
     printf("  %d pairs, %d overlapping\n", checked, hits);
     CHECK(hits >= 15); /* the test must exercise real contacts */
+
+    /* the same pairs through the OpenCL kernel: the host build's numbers to 1e-12 (double) */
+    pd_device *dev = NULL;
+    pd_error err = {0};
+    double x[3 * NBODY], q[4 * NBODY], size[NBODY], *dout = malloc(sizeof(double) * 12 * npairs);
+    int shape[NBODY];
+    for (int i = 0; i < NBODY; i++) {
+        x[3 * i] = b[i].x.x;
+        x[3 * i + 1] = b[i].x.y;
+        x[3 * i + 2] = b[i].x.z;
+        memcpy(q + 4 * i, b[i].q, sizeof b[i].q);
+        size[i] = b[i].size;
+        shape[i] = b[i].shape;
+    }
+    np_tables tabs = {NSHAPE, vert, unit_vol, tri, voff, toff, vt_off, vt};
+    if (pd_device_open(-1, &dev, &err) != PD_OK ||
+        np_run_cl(dev, &tabs, x, q, size, shape, NBODY, pairs, npairs, 1, dout, &err) != PD_OK) {
+        TEST_FAILF("opencl narrow phase: %s", err.msg);
+    } else {
+        int agree = 1;
+        for (int k = 0; k < npairs; k++) {
+            const double *h = host + 12 * k, *d = dout + 12 * k;
+            agree &= h[0] == d[0];
+            for (int c = 4; c < 12; c++)
+                agree &= fabs(h[c] - d[c]) <= 1e-12 * (fabs(h[c]) + (c == 4 ? 0 : b[0].size));
+        }
+        CHECK(agree);
+    }
+    pd_device_close(dev);
+    free(dout);
     free(iscr);
     free(rscr);
     free(vert);
