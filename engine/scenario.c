@@ -203,6 +203,19 @@ static json_t *obj(sc_parse *p, json_t *o, const char *at, const char *key, int 
     return v;
 }
 
+/* An object member that must be a JSON array when present. */
+static json_t *arr(sc_parse *p, json_t *o, const char *at, const char *key)
+{
+    char c[160];
+    child(c, sizeof c, at, key);
+    json_t *v = json_object_get(o, key);
+    if (v && !json_is_array(v)) {
+        diag(p, c, "must be an array");
+        return NULL;
+    }
+    return v;
+}
+
 static int find_material(const pd_scenario *s, const char *name)
 {
     for (int i = 0; i < s->nmat; i++)
@@ -318,12 +331,8 @@ static void parse_interactions(sc_parse *p, json_t *root)
                                        "damping_coefficient",
                                        NULL};
     pd_scenario *s = p->s;
-    json_t *a = json_object_get(root, "interactions");
+    json_t *a = arr(p, root, "", "interactions");
     if (!a) return; /* missing pairs are reported where materials are used */
-    if (!json_is_array(a)) {
-        diag(p, "/interactions", "must be an array");
-        return;
-    }
     s->inter = calloc(json_array_size(a) + 1, sizeof *s->inter);
     if (!s->inter) return;
     size_t i;
@@ -740,12 +749,8 @@ static void parse_walls(sc_parse *p, json_t *root)
                                        "velocity", "angular_velocity", "center", NULL};
     static const double zero[3] = {0, 0, 0};
     pd_scenario *s = p->s;
-    json_t *a = json_object_get(root, "walls");
+    json_t *a = arr(p, root, "", "walls");
     if (!a) return;
-    if (!json_is_array(a)) {
-        diag(p, "/walls", "must be an array");
-        return;
-    }
     s->wall = calloc(json_array_size(a) + 1, sizeof *s->wall);
     if (!s->wall) return;
     size_t i;

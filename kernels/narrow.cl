@@ -45,17 +45,5 @@ __kernel void narrow_phase(__global const int *pairs, int npairs, __global const
     ovl_out o;
     ovl_compute(&in, &o);
     np_to_world(&b[0], ra, &o);
-    __global pd_real *r = out + 12 * g;
-    r[0] = (pd_real)o.hit;
-    r[1] = (pd_real)o.degenerate;
-    r[2] = (pd_real)o.kept_a;
-    r[3] = (pd_real)o.kept_b;
-    r[4] = o.volume;
-    r[5] = o.centroid.x;
-    r[6] = o.centroid.y;
-    r[7] = o.centroid.z;
-    r[8] = o.normal.x;
-    r[9] = o.normal.y;
-    r[10] = o.normal.z;
-    r[11] = o.depth;
+    ovl_out_store(out + 12 * g, &o);
 }

@@ -378,6 +378,24 @@ PD_FN void ovl_miss(ovl_out *o, const ovl_ctx *c)
     o->depth = PD_R(0);
 }
 
+/* Writes o as the kernels' 12-real result record: hit, degenerate, kept_a, kept_b, volume,
+ * centroid[3], normal[3], depth (read back by ovl_result_unpack on the host). */
+PD_FN void ovl_out_store(PD_GLOBAL pd_real *r, const ovl_out *o)
+{
+    r[0] = (pd_real)o->hit;
+    r[1] = (pd_real)o->degenerate;
+    r[2] = (pd_real)o->kept_a;
+    r[3] = (pd_real)o->kept_b;
+    r[4] = o->volume;
+    r[5] = o->centroid.x;
+    r[6] = o->centroid.y;
+    r[7] = o->centroid.z;
+    r[8] = o->normal.x;
+    r[9] = o->normal.y;
+    r[10] = o->normal.z;
+    r[11] = o->depth;
+}
+
 /* The overlap of A and B: volume, centroid, normal and depth (section 4.2). */
 PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
 {
