@@ -37,6 +37,9 @@ all: $(BUILD)/polydem
 DEB_PACKAGES := build-essential ocl-icd-opencl-dev opencl-c-headers pocl-opencl-icd clinfo \
                 clang-format libjansson-dev libhdf5-dev hdf5-tools python3-jsonschema \
                 libxml2-utils
+# components add their rules, tests and packages here (server/server.mk: polydemd)
+-include server/server.mk
+
 deps:
 	@sh tools/install_deps.sh $(DEB_PACKAGES)
 

@@ -25,6 +25,8 @@ enum {
     PD_EMESH = -3,  /* mesh failed validation */
     PD_ENOMEM = -4, /* allocation failed */
     PD_ECL = -5,    /* OpenCL failure */
+    PD_ECANCELLED = -6, /* a run was stopped through its cancel flag */
+    PD_EDIVERGED = -7,  /* a run produced NaN or runaway energy (the message names step, particle) */
 };
 
 typedef struct pd_error {
@@ -225,6 +227,64 @@ int pd_forces_cl(pd_device *dev, const double *in, int n, int dbl, double *out, 
 /* The same overlap as pd_overlap_host, run by the OpenCL kernel on dev. */
 int pd_overlap_cl(pd_device *dev, const pd_mesh *a, const pd_pose *pa, const pd_mesh *b,
                   const pd_pose *pb, int flags, pd_contact *out, pd_error *err);
+
+/* ---- running a scenario (engine/sim*.c) ----------------------------------------------------- */
+
+/* Where a run stands; passed to the progress callback and returned at the end. */
+typedef struct pd_progress {
+    long long step, steps_total;
+    double sim_time;         /* s */
+    double sim_duration;     /* s */
+    double fraction;         /* step / steps_total */
+    double steps_per_second; /* wall-clock rate over the recent past */
+    double eta_seconds;      /* wall-clock seconds left at that rate (-1 while unknown) */
+    long particles;
+    long contacts;          /* contacts with positive overlap at the last stats step */
+    long broad_pairs;       /* candidate pairs of the broad phase at the last stats step */
+    double kinetic_energy;  /* J, translational + rotational, at the last stats step */
+    double wall_seconds;    /* since the run started */
+    long long frames;       /* output frames written so far */
+} pd_progress;
+
+/*
+ * Called from the running thread about every progress_interval wall seconds and once at the end.
+ * Return non-zero to cancel the run (as the cancel flag does).
+ */
+typedef int (*pd_progress_fn)(const pd_progress *p, void *user);
+
+typedef struct pd_run_options {
+    const char *output_path;  /* HDF5 result; written as "<path>.partial", renamed when done,
+                                 with "<path>.xmf" beside it. Required. */
+    pd_progress_fn progress;  /* may be NULL */
+    void *user;               /* passed to progress */
+    double progress_interval; /* wall seconds between callbacks; <= 0 means 0.5 */
+    /* Set non-zero from any thread to stop the run at the end of the current step; pd_run then
+     * returns PD_ECANCELLED and removes the partial result. May be NULL. */
+    volatile int *cancel;
+    int shape_meshes; /* also write every particle's world-space mesh per frame for ParaView */
+} pd_run_options;
+
+/*
+ * Runs scenario s on dev to its duration, writing the result file. Returns PD_OK, PD_ECANCELLED,
+ * PD_EDIVERGED (NaN or runaway energy: the message names the step and particle), PD_EINVAL (a
+ * scenario the device cannot run, e.g. double precision without cl_khr_fp64, or dt above the
+ * stable estimate without allow_unstable_dt), PD_EIO, PD_ENOMEM or PD_ECL. final (may be NULL)
+ * receives the last progress record whatever the outcome. A device runs one scenario at a time.
+ */
+int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_progress *final,
+           pd_error *err);
+
+/* The scenario's name and its JSON text as submitted. */
+const char *pd_scenario_name(const pd_scenario *s);
+const char *pd_scenario_json(const pd_scenario *s);
+
+/*
+ * Device self-test (seed 004 section 5.3.3): builds every program, runs the overlap kernel on a
+ * few poses of non-convex shapes against the host build, and runs a short two-sphere Hertz
+ * collision scenario on the device against the analytic contact time and peak overlap.
+ * report (may be NULL) receives a one-line human-readable summary. PD_OK when the device passed.
+ */
+int pd_device_selftest(pd_device *dev, char *report, size_t report_len, pd_error *err);
 
 #ifdef __cplusplus
 }

@@ -1048,3 +1048,13 @@ int pd_scenario_load(const char *path, pd_scenario **out, pd_diags *diags, pd_er
     }
     return rc;
 }
+
+const char *pd_scenario_name(const pd_scenario *s)
+{
+    return s->name;
+}
+
+const char *pd_scenario_json(const pd_scenario *s)
+{
+    return s->json ? s->json : "";
+}

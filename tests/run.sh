@@ -8,7 +8,7 @@ BUILD=${BUILD:-build}
 export POLYDEM="$BUILD/polydem"
 export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=0}
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$(pwd)/tests/lsan.supp:print_suppressions=0}
-for t in "$@" tests/cli/test_*.sh; do
+for t in "$@" tests/cli/test_*.sh tests/server/test_*.sh tests/clients/test_*.sh; do
     [ -e "$t" ] || continue
     echo "== $t"
     out=$(mktemp)
