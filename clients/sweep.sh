@@ -247,7 +247,8 @@ done
 
 # Wait for every job, printing a status line on stderr when it changes.
 start=$(date +%s)
-last_line=""
+last_counts=""
+last_print=0
 last_ok=$start
 timed_out=0
 while :; do
@@ -285,9 +286,11 @@ while :; do
         esac
     done
     line="$sweep_id: $done_n/$njobs succeeded, $failed failed or refused, $running running${active:+ ($active)}, $queued queued"
-    if [ "$line" != "$last_line" ]; then
+    counts="$done_n $failed $running $queued"
+    if [ "$counts" != "$last_counts" ] || [ $(($(date +%s) - last_print)) -ge 10 ]; then
         echo "$prog: $line" >&2
-        last_line=$line
+        last_counts=$counts
+        last_print=$(date +%s)
     fi
     [ $((running + queued)) -gt 0 ] || break
     if [ "$timeout" -gt 0 ] && [ $(($(date +%s) - start)) -ge "$timeout" ]; then

@@ -1,0 +1,534 @@
+#!/usr/bin/env python3
+"""polydem_client - a small client for polydemd, standard library only.
+
+As a library:
+
+    from polydem_client import Client
+    c = Client("http://127.0.0.1:8080", token=None)
+    job = c.submit_file("examples/collision.json", tags=["demo"])
+    job = c.wait(job["id"], progress=print_progress)
+    c.download(job["id"], "collision.h5")
+    rows = c.sweep(scenario, [("/interactions/0/friction", [0.2, 0.3])])
+
+As a command (python3 clients/python/polydem_client.py COMMAND --help for each):
+
+    submit SCENARIO.json [--tag T] [--priority N] [--wait]   prints the job id
+    wait JOB_ID...                                            progress on stderr until they end
+    download JOB_ID [-o FILE] [--xmf]                         the HDF5 result (or its XDMF)
+    sweep SCENARIO.json --set PTR=V1,V2 [--set ...] [--out FILE]   the same CSV as clients/sweep.sh
+
+--server (default $POLYDEM_SERVER or http://127.0.0.1:8080) and --token (default $POLYDEM_TOKEN)
+go before the command. Exit status: 0 success; 1 a job failed or was refused; 2 bad usage or
+input; 3 the server cannot be reached or answers something unexpected.
+"""
+
+import argparse
+import csv
+import hashlib
+import io
+import itertools
+import json
+import math
+import os
+import sys
+import time
+import urllib.error
+import urllib.parse
+import urllib.request
+
+DEFAULT_SERVER = "http://127.0.0.1:8080"
+FINISHED = ("succeeded", "failed", "cancelled")
+CSV_TAIL = ["status", "final_kinetic_energy_J", "peak_contacts", "peak_wall_force_N"]
+
+
+class PolydemError(Exception):
+    """An error answer from the server (status > 0) or no answer at all (status 0)."""
+
+    def __init__(self, status, message, details=None):
+        super().__init__(message)
+        self.status = status
+        self.message = message
+        self.details = details or []
+
+    def __str__(self):
+        lines = [self.message if self.status == 0 else "HTTP %d: %s" % (self.status, self.message)]
+        lines += ["  %s: %s" % (d.get("path", "?"), d.get("message", "")) for d in self.details]
+        return "\n".join(lines)
+
+
+# ---- JSON pointers (RFC 6901) -------------------------------------------------------------------
+
+def pointer_tokens(pointer):
+    if pointer == "":
+        return []
+    if not pointer.startswith("/"):
+        raise ValueError("JSON pointer %r must start with '/'" % pointer)
+    return [t.replace("~1", "/").replace("~0", "~") for t in pointer[1:].split("/")]
+
+
+def pointer_set(doc, pointer, value):
+    """Returns a copy of doc with value at pointer; containers on the way must exist (the last
+    object member may be new). Raises ValueError naming what does not fit."""
+    doc = json.loads(json.dumps(doc))
+    toks = pointer_tokens(pointer)
+    if not toks:
+        return value
+    cur = doc
+    for depth, t in enumerate(toks):
+        last = depth == len(toks) - 1
+        where = "/" + "/".join(toks[:depth]) if depth else "the document"
+        if isinstance(cur, list):
+            if not t.isdigit() or (len(t) > 1 and t[0] == "0"):
+                raise ValueError("%s is an array: %r is not an index" % (where, t))
+            i = int(t)
+            if i >= len(cur):
+                raise ValueError("%s has %d elements, no index %d" % (where, len(cur), i))
+        elif isinstance(cur, dict):
+            i = t
+            if not last and i not in cur:
+                raise ValueError("%s has no member %r" % (where, t))
+        else:
+            raise ValueError("%s is a %s, not a container" % (where, type(cur).__name__))
+        if last:
+            cur[i] = value
+        else:
+            cur = cur[i]
+    return doc
+
+
+def split_values(text):
+    """Splits 'V1,V2,...' at commas outside brackets, braces and strings; each value is JSON
+    when it parses as JSON, else text. Returns [(text, value)]."""
+    parts, cur, depth, in_str, esc = [], "", 0, False, False
+    for ch in text:
+        if in_str:
+            esc = (not esc) and ch == "\\"
+            if ch == '"' and not esc:
+                in_str = False
+            cur += ch
+            continue
+        if ch == '"':
+            in_str = True
+        elif ch in "[{":
+            depth += 1
+        elif ch in "]}":
+            depth -= 1
+        elif ch == "," and depth == 0:
+            parts.append(cur)
+            cur = ""
+            continue
+        cur += ch
+    parts.append(cur)
+    out = []
+    for p in parts:
+        p = p.strip()
+        if not p:
+            raise ValueError("empty value")
+        try:
+            out.append((p, json.loads(p)))
+        except ValueError:
+            out.append((p, p))
+    return out
+
+
+def parse_set(spec):
+    """'POINTER=V1,V2' -> (pointer, [(text, value)]); ValueError with the expected form."""
+    form = "expected POINTER=V1,V2,... with POINTER starting with '/', e.g. /interactions/0/friction=0.2,0.3"
+    if not spec.startswith("/") or "=" not in spec:
+        raise ValueError("--set %r: %s" % (spec, form))
+    pointer, values = spec.split("=", 1)
+    try:
+        return pointer, split_values(values)
+    except ValueError as e:
+        raise ValueError("--set %r: %s; %s" % (spec, e, form)) from None
+
+
+# ---- /stats summaries ---------------------------------------------------------------------------
+
+def stats_columns(stats):
+    """The /stats answer as columns: {time: [...], kinetic_energy: [...], contacts: [...],
+    wall_force: {name: [[fx, fy, fz], ...]}}; rows ([{time, ...}]) are turned into columns."""
+    if isinstance(stats, dict) and isinstance(stats.get("stats"), (dict, list)):
+        stats = stats["stats"]
+    if isinstance(stats, list):
+        cols = {"time": [], "kinetic_energy": [], "contacts": [], "wall_force": {}}
+        for r in stats:
+            for k in ("time", "kinetic_energy", "contacts"):
+                cols[k].append(r.get(k))
+            for name, f in (r.get("wall_force") or {}).items():
+                cols["wall_force"].setdefault(name, []).append(f)
+        return cols
+    return stats if isinstance(stats, dict) else {}
+
+
+def summarize(stats):
+    """(final kinetic energy [J], peak contacts, peak |wall force| [N]); None where absent."""
+    c = stats_columns(stats)
+    ke = c.get("kinetic_energy") or []
+    contacts = [x for x in (c.get("contacts") or []) if x is not None]
+    forces = [math.sqrt(sum(x * x for x in f)) for series in (c.get("wall_force") or {}).values()
+              for f in series if f]
+    return (ke[-1] if ke else None, max(contacts) if contacts else None,
+            max(forces) if forces else None)
+
+
+# ---- the client ---------------------------------------------------------------------------------
+
+class Client:
+    def __init__(self, server=None, token=None, timeout=60.0):
+        self.server = (server or os.environ.get("POLYDEM_SERVER") or DEFAULT_SERVER).rstrip("/")
+        if not self.server.startswith(("http://", "https://")):
+            raise ValueError("server %r: expected http://HOST:PORT or https://..." % self.server)
+        self.token = token if token is not None else os.environ.get("POLYDEM_TOKEN") or None
+        self.timeout = timeout
+
+    def _open(self, method, path, body=None, headers=None):
+        h = dict(headers or {})
+        if self.token:
+            h["Authorization"] = "Bearer " + self.token
+        if body is not None and not isinstance(body, bytes):
+            body = json.dumps(body).encode()
+            h.setdefault("Content-Type", "application/json")
+        req = urllib.request.Request(self.server + path, data=body, method=method, headers=h)
+        try:
+            return urllib.request.urlopen(req, timeout=self.timeout)
+        except urllib.error.HTTPError as e:
+            raise self._error(e) from None
+        except (urllib.error.URLError, OSError) as e:
+            reason = getattr(e, "reason", e)
+            raise PolydemError(0, "cannot reach %s: %s" % (self.server, reason)) from None
+
+    @staticmethod
+    def _error(e):
+        raw = e.read()
+        try:
+            err = json.loads(raw)["error"]
+            pe = PolydemError(e.code, err.get("message", ""), err.get("details"))
+        except (ValueError, KeyError, TypeError, AttributeError):
+            pe = PolydemError(e.code, raw.decode("utf-8", "replace")[:300] or e.reason)
+        pe.retry_after = e.headers.get("Retry-After")
+        return pe
+
+    def request(self, method, path, body=None, headers=None):
+        """The decoded JSON answer (None for an empty one); PolydemError otherwise."""
+        with self._open(method, path, body, headers) as r:
+            data = r.read()
+        return json.loads(data) if data.strip() else None
+
+    # jobs
+    def submit(self, scenario, tags=None, priority=0, idempotency_key=None, queue_wait=600):
+        """Submits a scenario (a dict); returns the job. A full queue (429) is waited out, up to
+        queue_wait seconds, as its Retry-After says."""
+        body = {"scenario": scenario, "tags": list(tags or []), "priority": priority}
+        key = idempotency_key or hashlib.sha256(json.dumps(body, sort_keys=True).encode()
+                                                + str(time.time()).encode()).hexdigest()[:32]
+        deadline = time.monotonic() + queue_wait
+        tries = 0
+        while True:
+            try:
+                return self.request("POST", "/v1/jobs", body, {"Idempotency-Key": key})
+            except PolydemError as e:
+                tries += 1
+                if e.status == 429 and time.monotonic() < deadline:
+                    time.sleep(float(e.retry_after or 5))
+                elif e.status == 0 and tries < 3:  # the key makes the retry safe
+                    time.sleep(1)
+                else:
+                    raise
+
+    def upload_meshes(self, scenario, base_dir):
+        """Replaces mesh file paths (shapes and walls) with the ids of uploaded meshes: the
+        daemon cannot read the client's files. Returns a new scenario."""
+        sc = json.loads(json.dumps(scenario))
+        holders = list((sc.get("shapes") or {}).values()) + list(sc.get("walls") or [])
+        for h in holders:
+            path = h.get("mesh") if isinstance(h, dict) else None
+            if isinstance(path, str) and not path.startswith("sha256:"):
+                full = os.path.join(base_dir, path)
+                try:
+                    with open(full, "rb") as f:
+                        data = f.read()
+                except OSError as e:
+                    raise ValueError("mesh file %r: %s" % (full, e.strerror)) from None
+                h["mesh"] = self.request("POST", "/v1/meshes", data,
+                                         {"Content-Type": "application/octet-stream"})["id"]
+        return sc
+
+    def submit_file(self, path, **kw):
+        return self.submit(self.upload_meshes(load_scenario(path), os.path.dirname(path)), **kw)
+
+    def job(self, job_id):
+        return self.request("GET", "/v1/jobs/" + urllib.parse.quote(job_id, safe=""))
+
+    def jobs(self, status=None, tag=None, limit=None):
+        q = {k: v for k, v in (("status", status), ("tag", tag), ("limit", limit)) if v}
+        r = self.request("GET", "/v1/jobs" + ("?" + urllib.parse.urlencode(q) if q else ""))
+        return r.get("jobs", []) if isinstance(r, dict) else r
+
+    def cancel(self, job_id):
+        return self.request("POST", "/v1/jobs/%s/cancel" % urllib.parse.quote(job_id, safe=""))
+
+    def delete(self, job_id):
+        return self.request("DELETE", "/v1/jobs/" + urllib.parse.quote(job_id, safe=""))
+
+    def stats(self, job_id):
+        return self.request("GET", "/v1/jobs/%s/stats" % urllib.parse.quote(job_id, safe=""))
+
+    def validate(self, scenario):
+        return self.request("POST", "/v1/scenarios/validate", scenario)
+
+    def wait(self, job_ids, poll=1.0, timeout=None, progress=None, lost_after=30.0):
+        """Polls until every job has finished; returns {id: job}. progress(jobs) is called after
+        every poll. TimeoutError after timeout seconds; PolydemError when the server has not
+        answered for lost_after seconds."""
+        single = isinstance(job_ids, str)
+        ids = [job_ids] if single else list(job_ids)
+        jobs = {}
+        start = last_ok = time.monotonic()
+        while True:
+            for i in ids:
+                if i in jobs and jobs[i].get("status") in FINISHED:
+                    continue
+                try:
+                    jobs[i] = self.job(i)
+                    last_ok = time.monotonic()
+                except PolydemError as e:  # a job not seen yet, or a long silence, ends the wait
+                    if e.status != 0 or i not in jobs or time.monotonic() - last_ok > lost_after:
+                        raise
+            if progress:
+                progress(jobs)
+            if all(jobs.get(i, {}).get("status") in FINISHED for i in ids):
+                return jobs[ids[0]] if single else jobs
+            if timeout is not None and time.monotonic() - start > timeout:
+                raise TimeoutError("jobs still unfinished after %g s" % timeout)
+            time.sleep(poll)
+
+    def download(self, job_id, path, xmf=False, chunk=1 << 20):
+        """Streams the result (or its XDMF) to path through path + '.part', resuming a partial
+        download with a Range request. Returns the number of bytes in the file."""
+        route = "/v1/jobs/%s/result%s" % (urllib.parse.quote(job_id, safe=""), ".xmf" if xmf else "")
+        part = path + ".part"
+        have = os.path.getsize(part) if os.path.exists(part) else 0
+        headers = {"Range": "bytes=%d-" % have} if have else {}
+        try:
+            r = self._open("GET", route, headers=headers)
+        except PolydemError as e:
+            if e.status != 416:
+                raise
+            have = 0
+            r = self._open("GET", route)
+        with r, open(part, "ab" if r.status == 206 else "wb") as f:
+            while True:
+                b = r.read(chunk)
+                if not b:
+                    break
+                f.write(b)
+        os.replace(part, path)
+        return os.path.getsize(path)
+
+    def sweep(self, scenario, sets, tags=None, priority=0, poll=1.0, timeout=None, progress=None,
+              log=None):
+        """Runs the grid of sets ([(pointer, [(text, value)])]; plain values are accepted too):
+        returns (sweep_id, rows), each row [job_id, texts..., status, final KE, peak contacts,
+        peak wall force]. Refused jobs get status 'rejected'; log(message) reports failures."""
+        log = log or (lambda m: None)
+        sets = [(p, [v if isinstance(v, tuple) else (json.dumps(v), v) for v in vals])
+                for p, vals in sets]
+        for p, vals in sets:  # every pointer must fit before anything is submitted
+            pointer_set(scenario, p, vals[0][1])
+        sweep_id = "sweep-%s-%s" % (time.strftime("%Y%m%d-%H%M%S"), os.urandom(3).hex())
+        grid = list(itertools.product(*[vals for _, vals in sets]))
+        base = str(scenario.get("name", "scenario"))[:52]
+        entries = []
+        for i, combo in enumerate(grid):
+            sc = scenario
+            for (p, _), (_, v) in zip(sets, combo):
+                sc = pointer_set(sc, p, v)
+            sc["name"] = "%s-%d" % (base, i)
+            texts = [t for t, _ in combo]
+            try:
+                job = self.submit(sc, [sweep_id] + list(tags or []), priority,
+                                  idempotency_key="%s-%d" % (sweep_id, i))
+                entries.append([job["id"], texts, job.get("status", "queued")])
+            except PolydemError as e:
+                if e.status in (0, 401, 403):
+                    raise
+                log("job %d (%s) refused: %s" % (i, " ".join("%s=%s" % (p, t) for (p, _), t in
+                                                              zip(sets, texts)), e))
+                entries.append(["", texts, "rejected"])
+        ids = [e[0] for e in entries if e[0]]
+        timed_out = False
+        try:
+            jobs = self.wait(ids, poll=poll, timeout=timeout, progress=progress) if ids else {}
+        except TimeoutError as e:
+            log(str(e))
+            timed_out = True
+            jobs = {i: self.job(i) for i in ids}
+        rows = []
+        for job_id, texts, status in entries:
+            ke = contacts = force = None
+            if job_id:
+                job = jobs[job_id]
+                status = job.get("status", "?")
+                if status in ("failed", "cancelled"):
+                    log("job %s %s%s" % (job_id, status, ": %s" % job["error"] if job.get("error") else ""))
+                if status == "succeeded":
+                    try:
+                        ke, contacts, force = summarize(self.stats(job_id))
+                    except PolydemError as e:
+                        log("job %s: no usable /stats: %s" % (job_id, e))
+            rows.append([job_id] + texts + [status, ke, contacts, force])
+        self.last_sweep_timed_out = timed_out
+        return sweep_id, rows
+
+
+def load_scenario(path):
+    try:
+        with open(path, encoding="utf-8") as f:
+            sc = json.load(f)
+    except OSError as e:
+        raise ValueError("cannot read scenario file %r: %s" % (path, e.strerror)) from None
+    except ValueError as e:
+        raise ValueError("%s: not valid JSON: %s" % (path, e)) from None
+    if not isinstance(sc, dict):
+        raise ValueError("%s: a scenario is a JSON object" % path)
+    return sc
+
+
+def write_csv(f, pointers, rows):
+    w = csv.writer(f, lineterminator="\n")
+    w.writerow(["job_id"] + list(pointers) + CSV_TAIL)
+    for r in rows:
+        w.writerow(["" if x is None else repr(x) if isinstance(x, float) else x for x in r])
+
+
+# ---- command line -------------------------------------------------------------------------------
+
+def progress_printer(stream=sys.stderr, every=5.0):
+    """A wait() progress callback: a line when a status changes, else one every `every` s."""
+    last = [None, 0.0]
+
+    def show(jobs):
+        parts = []
+        for i, j in sorted(jobs.items()):
+            p = j.get("progress") or {}
+            s = "%s %s" % (i, j.get("status"))
+            if j.get("status") == "running":
+                s += " %.0f%%" % (100 * (p.get("fraction") or 0))
+                if p.get("sim_time") is not None:
+                    s += " t=%.4g s" % p["sim_time"]
+                if p.get("steps_per_second"):
+                    s += " %.0f steps/s" % p["steps_per_second"]
+                if p.get("eta_seconds") is not None:
+                    s += " ETA %.0f s" % p["eta_seconds"]
+            parts.append(s)
+        statuses = sorted((i, j.get("status")) for i, j in jobs.items())
+        if parts and (statuses != last[0] or time.monotonic() - last[1] >= every):
+            print("polydem: " + "; ".join(parts), file=stream, flush=True)
+            last[0], last[1] = statuses, time.monotonic()
+    return show
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="polydem_client.py", description="Client for polydemd.")
+    ap.add_argument("--server", help="polydemd address (default $POLYDEM_SERVER or %s)" % DEFAULT_SERVER)
+    ap.add_argument("--token", help="bearer token (default $POLYDEM_TOKEN)")
+    ap.add_argument("--timeout", type=float, default=None,
+                    help="seconds to wait for jobs (wait, submit --wait, sweep; default: no limit)")
+    sub = ap.add_subparsers(dest="cmd", metavar="COMMAND")
+    sub.required = True
+    p = sub.add_parser("submit", help="submit a scenario file; prints the job id")
+    p.add_argument("scenario")
+    p.add_argument("--tag", action="append", default=[])
+    p.add_argument("--priority", type=int, default=0)
+    p.add_argument("--idempotency-key")
+    p.add_argument("--wait", action="store_true", help="wait for the job, progress on stderr")
+    p = sub.add_parser("wait", help="wait for jobs to finish, progress on stderr")
+    p.add_argument("job_id", nargs="+")
+    p.add_argument("--poll", type=float, default=1.0)
+    p = sub.add_parser("download", help="download a job's HDF5 result (or XDMF)")
+    p.add_argument("job_id")
+    p.add_argument("-o", "--output", help="file name (default JOB_ID.h5, or .xmf)")
+    p.add_argument("--xmf", action="store_true", help="the XDMF descriptor instead")
+    p = sub.add_parser("sweep", help="run a parameter grid; writes a CSV")
+    p.add_argument("scenario")
+    p.add_argument("--set", action="append", default=[], metavar="PTR=V1,V2",
+                   help="JSON pointer and its values (repeat for a grid)")
+    p.add_argument("--out", help="CSV file (default standard output)")
+    p.add_argument("--tag", action="append", default=[])
+    p.add_argument("--priority", type=int, default=0)
+    p.add_argument("--poll", type=float, default=1.0)
+    a = ap.parse_args(argv)
+
+    def fail(code, msg):
+        print("polydem_client: " + msg, file=sys.stderr)
+        return code
+
+    try:
+        c = Client(a.server, a.token)
+    except ValueError as e:
+        return fail(2, "--server: %s" % e)
+    try:
+        if a.cmd == "submit":
+            job = c.submit_file(a.scenario, tags=a.tag, priority=a.priority,
+                                idempotency_key=a.idempotency_key)
+            print(job["id"], flush=True)
+            if not a.wait:
+                return 0
+            job = c.wait(job["id"], timeout=a.timeout, progress=progress_printer())
+            if job.get("status") != "succeeded":
+                return fail(1, "job %s %s%s" % (job["id"], job.get("status"),
+                                                ": %s" % job["error"] if job.get("error") else ""))
+            return 0
+        if a.cmd == "wait":
+            jobs = c.wait(a.job_id, poll=a.poll, timeout=a.timeout, progress=progress_printer())
+            bad = [j for j in jobs.values() if j.get("status") != "succeeded"]
+            for j in bad:
+                fail(1, "job %s %s%s" % (j["id"], j.get("status"),
+                                         ": %s" % j["error"] if j.get("error") else ""))
+            return 1 if bad else 0
+        if a.cmd == "download":
+            out = a.output or a.job_id + (".xmf" if a.xmf else ".h5")
+            n = c.download(a.job_id, out, xmf=a.xmf)
+            print("polydem_client: wrote %s (%d bytes)" % (out, n), file=sys.stderr)
+            return 0
+        if a.cmd == "sweep":
+            if not a.set:
+                return fail(2, "sweep: no --set given: nothing to sweep")
+            sets = [parse_set(s) for s in a.set]
+            scenario = c.upload_meshes(load_scenario(a.scenario), os.path.dirname(a.scenario))
+            for p, vals in sets:
+                try:
+                    pointer_set(scenario, p, vals[0][1])
+                except ValueError as e:
+                    return fail(2, "--set %r: %r does not fit %s: %s" % (p + "=...", p, a.scenario, e))
+            sweep_id, rows = c.sweep(scenario, sets, tags=a.tag, priority=a.priority, poll=a.poll,
+                                     timeout=a.timeout, progress=progress_printer(),
+                                     log=lambda m: print("polydem_client: " + m, file=sys.stderr))
+            buf = io.StringIO()
+            write_csv(buf, [p for p, _ in sets], rows)
+            if a.out:
+                try:
+                    with open(a.out, "w", encoding="utf-8") as f:
+                        f.write(buf.getvalue())
+                except OSError as e:
+                    return fail(2, "--out %r: %s" % (a.out, e.strerror))
+                print("polydem_client: %s: wrote %s (%d rows)" % (sweep_id, a.out, len(rows)),
+                      file=sys.stderr)
+            else:
+                sys.stdout.write(buf.getvalue())
+            ok = all(r[-4] == "succeeded" for r in rows) and not c.last_sweep_timed_out
+            return 0 if ok else 1
+    except ValueError as e:
+        return fail(2, str(e))
+    except TimeoutError as e:
+        return fail(1, str(e))
+    except PolydemError as e:
+        return fail(3 if e.status in (0, 401, 403) or e.status >= 500 else 1, str(e))
+    except KeyboardInterrupt:
+        return fail(130, "interrupted")
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())
