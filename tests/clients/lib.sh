@@ -1,0 +1,85 @@
+# lib.sh - shared by tests/clients/test_*.sh (POSIX sh, sourced): ok/bad counters, a scratch
+# directory, and a real polydemd on a free loopback port, stopped on exit.
+#
+#   . tests/clients/lib.sh
+#   start_daemon || { summary; exit 1; }   # sets $URL; $POLYDEMD_ARGS adds daemon options
+#   ...
+#   summary                                # prints "N passed, N failed"; exit status with it
+
+BUILD=${BUILD:-build}
+POLYDEMD=${POLYDEMD:-$BUILD/polydemd}
+passed=0
+failed=0
+tmp=$(mktemp -d)
+daemon_pid=""
+
+ok() { passed=$((passed + 1)); echo "ok   $1"; }
+bad() { failed=$((failed + 1)); echo "FAIL $1: $2"; }
+check() { # NAME EXPECTED ACTUAL
+    if [ "$2" = "$3" ]; then ok "$1"; else bad "$1" "expected '$2', got '$3'"; fi
+}
+
+cleanup() {
+    if [ -n "$daemon_pid" ]; then
+        kill "$daemon_pid" 2>/dev/null
+        # SIGTERM lets a running job reach a safe point; give it a few seconds, then insist.
+        i=0
+        while kill -0 "$daemon_pid" 2>/dev/null && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+        kill -9 "$daemon_pid" 2>/dev/null
+        wait "$daemon_pid" 2>/dev/null
+    fi
+    rm -rf "$tmp"
+}
+trap cleanup EXIT
+trap 'exit 130' INT TERM
+
+free_port() {
+    python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])'
+}
+
+# Starts $POLYDEMD with a fresh data directory; waits up to 60 s for /healthz (the daemon
+# compiles its kernels and runs the device self-test first).
+start_daemon() {
+    if [ ! -x "$POLYDEMD" ]; then
+        bad daemon "$POLYDEMD is not built (the daemon, issue 4; make builds it once server/ lands)"
+        return 1
+    fi
+    port=$(free_port)
+    URL="http://127.0.0.1:$port"
+    # shellcheck disable=SC2086 # POLYDEMD_ARGS is a list of options
+    "$POLYDEMD" --listen "127.0.0.1:$port" --data "$tmp/data" ${POLYDEMD_ARGS:-} \
+        >"$tmp/polydemd.log" 2>&1 &
+    daemon_pid=$!
+    i=0
+    while [ $i -lt 600 ]; do
+        if ! kill -0 "$daemon_pid" 2>/dev/null; then
+            bad daemon "polydemd exited at start: $(tail -n 5 "$tmp/polydemd.log")"
+            daemon_pid=""
+            return 1
+        fi
+        code=$(curl -s -o /dev/null -w '%{http_code}' --max-time 2 "$URL/healthz" 2>/dev/null)
+        if [ "$code" = 200 ]; then
+            ok "daemon answers /healthz on port $port"
+            return 0
+        fi
+        sleep 0.1
+        i=$((i + 1))
+    done
+    bad daemon "no healthy /healthz within 60 s (last $code): $(tail -n 5 "$tmp/polydemd.log")"
+    return 1
+}
+
+# examples/collision.json cut to 1000 steps and 11 frames, for tests that need jobs to finish fast.
+quick_scenario() { # OUT_FILE
+    jq '.time.duration = 0.001 | .time.output_interval = 0.0001 | .name = "quick-collision"' \
+        examples/collision.json >"$1"
+}
+
+summary() {
+    if [ "$failed" -ne 0 ] && [ -s "$tmp/polydemd.log" ]; then
+        echo "-- polydemd log (last 15 lines):"
+        tail -n 15 "$tmp/polydemd.log"
+    fi
+    echo "$passed passed, $failed failed"
+    [ "$failed" -eq 0 ]
+}

@@ -1,0 +1,105 @@
+#!/bin/sh
+# test_python_client.sh - clients/python/polydem_client.py: its JSON pointer, value-list and
+# /stats helpers and its refusals (no daemon needed), then submit, wait, download (HDF5 and
+# XDMF) and a 1x2 sweep against a real polydemd. Prints "N passed, N failed".
+# shellcheck source=tests/clients/lib.sh
+. tests/clients/lib.sh
+CLIENT=clients/python/polydem_client.py
+
+# helpers, through the module
+if python3 -B - >"$tmp/unit.out" 2>&1 <<'EOF'; then ok helpers; else bad helpers "$(tail -n 5 "$tmp/unit.out")"; fi
+import sys
+sys.path.insert(0, "clients/python")
+import polydem_client as pc
+
+def eq(what, want, got):
+    assert want == got, "%s: expected %r, got %r" % (what, want, got)
+
+sc = {"interactions": [{"friction": 0.5}], "materials": {"a/b": {"E": 1}}}
+eq("set array member", 0.2, pc.pointer_set(sc, "/interactions/0/friction", 0.2)["interactions"][0]["friction"])
+eq("original untouched", 0.5, sc["interactions"][0]["friction"])
+eq("escaped key", 7, pc.pointer_set(sc, "/materials/a~1b/E", 7)["materials"]["a/b"]["E"])
+eq("new last member", 0.1, pc.pointer_set(sc, "/interactions/0/damping", 0.1)["interactions"][0]["damping"])
+for bad in ("/interactions/3/friction", "/nope/x", "/interactions/x/friction", "/interactions/01/friction"):
+    try:
+        pc.pointer_set(sc, bad, 1)
+        raise AssertionError("accepted " + bad)
+    except ValueError:
+        pass
+eq("values", [("0.2", 0.2), ("1e7", 1e7), ("linear", "linear"), ("[0, 0, -9.81]", [0, 0, -9.81]), ('"a,b"', "a,b")],
+   pc.split_values('0.2, 1e7,linear,[0, 0, -9.81],"a,b"'))
+eq("parse_set", ("/seed", [("1", 1), ("2", 2)]), pc.parse_set("/seed=1,2"))
+for bad in ("seed=1", "/seed=", "/seed=1,,2"):
+    try:
+        pc.parse_set(bad)
+        raise AssertionError("accepted " + bad)
+    except ValueError as e:
+        assert "expected POINTER=V1,V2" in str(e), str(e)
+cols = {"time": [0, 1, 2], "kinetic_energy": [3.0, 2.0, 1.0], "contacts": [0, 5, 2],
+        "wall_force": {"floor": [[0, 0, 1], [3, 4, 0], [0, 0, 2]], "lid": [[0, 0, 0]] * 3}}
+eq("summary of columns", (1.0, 5, 5.0), pc.summarize(cols))
+rows = [{"time": t, "kinetic_energy": k, "contacts": c, "wall_force": {"floor": f}}
+        for t, k, c, f in zip([0, 1], [2.0, 1.5], [1, 0], [[0, 0, 6], [0, 0, 1]])]
+eq("summary of rows", (1.5, 1, 6.0), pc.summarize(rows))
+eq("summary without walls", (None, None, None), pc.summarize({}))
+print("helpers ok")
+EOF
+
+quick_scenario "$tmp/quick.json"
+dead="http://127.0.0.1:$(free_port)"
+timeout 20 python3 -B "$CLIENT" --server "$dead" submit "$tmp/quick.json" >/dev/null 2>"$tmp/err"
+rc=$?
+if [ "$rc" = 3 ] && grep -q "cannot reach $dead" "$tmp/err"; then ok unreachable_server; else
+    bad unreachable_server "expected exit 3 naming the server, got $rc: $(cat "$tmp/err")"; fi
+timeout 20 python3 -B "$CLIENT" --server "$dead" sweep "$tmp/quick.json" --set 'friction=1' >/dev/null 2>"$tmp/err"
+rc=$?
+if [ "$rc" = 2 ] && grep -q "expected POINTER=V1,V2" "$tmp/err"; then ok bad_set_syntax; else
+    bad bad_set_syntax "expected exit 2 and the form, got $rc: $(cat "$tmp/err")"; fi
+timeout 20 python3 -B "$CLIENT" --server "$dead" submit "$tmp/nothere.json" >/dev/null 2>"$tmp/err"
+rc=$?
+if [ "$rc" = 2 ] && grep -q "cannot read scenario file" "$tmp/err"; then ok missing_file; else
+    bad missing_file "expected exit 2 naming the file, got $rc: $(cat "$tmp/err")"; fi
+timeout 20 python3 -B "$CLIENT" --server "$dead" --bogus wait x >/dev/null 2>"$tmp/err"
+rc=$?
+if [ "$rc" = 2 ] && grep -q -- "--bogus" "$tmp/err"; then ok unknown_option; else
+    bad unknown_option "expected exit 2 naming --bogus, got $rc: $(cat "$tmp/err")"; fi
+
+if start_daemon; then
+    id=$(timeout 30 python3 -B "$CLIENT" --server "$URL" --timeout 120 submit "$tmp/quick.json" --tag pytest 2>"$tmp/err")
+    if [ -n "$id" ]; then ok "submit -> $id"; else bad submit "no job id: $(cat "$tmp/err")"; fi
+    timeout 130 python3 -B "$CLIENT" --server "$URL" --timeout 120 wait "$id" 2>"$tmp/wait.err"
+    rc=$?
+    check wait_exit_status 0 "$rc"
+    if grep -q "$id succeeded" "$tmp/wait.err"; then ok wait_reports_progress; else
+        bad wait_reports_progress "$(tail -n 3 "$tmp/wait.err")"; fi
+    timeout 60 python3 -B "$CLIENT" --server "$URL" --timeout 120 download "$id" -o "$tmp/r.h5" 2>"$tmp/err"
+    check download_exit_status 0 "$?"
+    check download_is_hdf5 "89484446" "$(head -c 4 "$tmp/r.h5" 2>/dev/null | od -An -tx1 | tr -d ' \n')"
+    if command -v h5dump >/dev/null 2>&1; then
+        if h5dump -H -g /stats "$tmp/r.h5" 2>/dev/null | grep -q kinetic_energy; then
+            ok download_opens_with_h5dump; else bad download_opens_with_h5dump "no /stats/kinetic_energy"; fi
+    fi
+    timeout 60 python3 -B "$CLIENT" --server "$URL" --timeout 120 download "$id" --xmf -o "$tmp/r.xmf" 2>"$tmp/err"
+    if grep -q "<Xdmf" "$tmp/r.xmf" 2>/dev/null; then ok download_xmf; else
+        bad download_xmf "$(head -c 200 "$tmp/r.xmf" 2>/dev/null) $(cat "$tmp/err")"; fi
+    # a partial file left by an interrupted download is completed with a Range request
+    head -c 1000 "$tmp/r.h5" >"$tmp/again.h5.part"
+    timeout 60 python3 -B "$CLIENT" --server "$URL" --timeout 120 download "$id" -o "$tmp/again.h5" 2>"$tmp/err"
+    if cmp -s "$tmp/r.h5" "$tmp/again.h5"; then ok download_resumes; else
+        bad download_resumes "the resumed file differs: $(cat "$tmp/err")"; fi
+    timeout 150 python3 -B "$CLIENT" --server "$URL" --timeout 120 sweep "$tmp/quick.json" --set '/interactions/0/damping=0,0.2' --poll 0.3 \
+        >"$tmp/sweep.csv" 2>"$tmp/sweep.err"
+    check sweep_exit_status 0 "$?"
+    check sweep_header "job_id,/interactions/0/damping,status,final_kinetic_energy_J,peak_contacts,peak_wall_force_N" \
+        "$(head -n 1 "$tmp/sweep.csv")"
+    check sweep_rows "0,succeeded 0.2,succeeded" \
+        "$(tail -n +2 "$tmp/sweep.csv" | cut -d, -f2,3 | tr '\n' ' ' | sed 's/ $//')"
+    timeout 30 python3 -B "$CLIENT" --server "$URL" --timeout 120 submit "$tmp/nothere.json" >/dev/null 2>&1
+    check missing_file_with_daemon 2 "$?"
+    jq '.interactions[0].friction = -1' "$tmp/quick.json" >"$tmp/invalid.json"
+    timeout 30 python3 -B "$CLIENT" --server "$URL" --timeout 120 submit "$tmp/invalid.json" >/dev/null 2>"$tmp/err"
+    rc=$?
+    if [ "$rc" = 1 ] && grep -q "/interactions/0/friction" "$tmp/err"; then ok invalid_names_field; else
+        bad invalid_names_field "expected exit 1 naming /interactions/0/friction, got $rc: $(cat "$tmp/err")"; fi
+fi
+summary
