@@ -260,3 +260,15 @@ def count_non_background(png, tolerance=24):
     busy = sum(n for px, n in counts.items()
                if max(abs(px[0] - bg[0]), abs(px[1] - bg[1]), abs(px[2] - bg[2])) > tolerance)
     return busy, w * h
+
+
+def count_near(png, rgb, tolerance=40):
+    """Pixels within tolerance (per channel) of the colour rgb, e.g. a plotted line's."""
+    w, h, bpp, rows = decode_png(png)
+    n = 0
+    for r in rows:
+        for x in range(0, w * bpp, bpp):
+            if abs(r[x] - rgb[0]) <= tolerance and abs(r[x + 1] - rgb[1]) <= tolerance and \
+                    abs(r[x + 2] - rgb[2]) <= tolerance:
+                n += 1
+    return n

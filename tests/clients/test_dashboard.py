@@ -1,0 +1,175 @@
+"""test_dashboard.py URL SCENARIO - the dashboard in headless Chromium against a running polydemd:
+the submit page loads an example and sends a pasted scenario, the jobs page lists the job and its
+progress reaches 100%, the job page's plots and 3D viewer render (pixels other than the
+background in each canvas's screenshot), and an invalid scenario shows the field error next to
+its path. Prints ok/FAIL lines; the caller prints the summary. Exit status: failures (0 = all ok).
+"""
+
+import json
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from cdp import Browser, CdpError, count_near, count_non_background  # noqa: E402
+
+URL = sys.argv[1].rstrip("/")
+SCENARIO = open(sys.argv[2]).read()
+SHOTS = os.environ.get("SHOTS")  # a directory to keep screenshots in, for a look by eye
+failed = 0
+
+
+def ok(name):
+    print("ok   " + name, flush=True)
+
+
+def bad(name, why):
+    global failed
+    failed += 1
+    print("FAIL %s: %s" % (name, why), flush=True)
+
+
+def step(name, fn):
+    """Runs one check; a CdpError or AssertionError fails it. Returns fn's value or None."""
+    try:
+        v = fn()
+        ok(name)
+        return v
+    except (CdpError, AssertionError) as e:
+        bad(name, e)
+        return None
+
+
+def set_editor(page, text):
+    page.eval("(() => { const t = document.getElementById('scenario'); t.value = %s;"
+              " t.dispatchEvent(new Event('input')); })()" % json.dumps(text))
+
+
+def shot(page, selector, name):
+    png = page.screenshot_of(selector)
+    if SHOTS:
+        with open(os.path.join(SHOTS, name + ".png"), "wb") as f:
+            f.write(png)
+    return png
+
+
+def painted(page, selector, name, at_least):
+    busy, total = count_non_background(shot(page, selector, name))
+    assert busy >= at_least * total, "%s: %d of %d pixels differ from the background (want >= %.1f%%)" % (
+        selector, busy, total, 100 * at_least)
+    return busy, total
+
+
+def main():
+    t0 = time.monotonic()
+    with Browser() as b:
+        page = b.new_page(URL + "/submit.html")
+        step("submit_page_loads", lambda: page.wait_for(
+            "document.querySelectorAll('#example option').length > 1 && !!document.querySelector('header.top .brand')", 15))
+
+        def example():
+            page.eval("(() => { const s = document.getElementById('example'); s.value = 'collision';"
+                      " s.dispatchEvent(new Event('change')); })()")
+            page.wait_for("document.getElementById('scenario').value.includes('\"collision\"')", 10)
+            page.wait_for("(document.querySelector('#validation .verdict') || {}).textContent === 'Valid scenario'", 15)
+        step("example_loads_and_validates", example)
+
+        # the field error next to its path: friction must be >= 0
+        invalid = json.loads(SCENARIO)
+        invalid["interactions"][0]["friction"] = -1
+
+        def field_error():
+            set_editor(page, json.dumps(invalid, indent=2))
+            page.wait_for("!!document.querySelector('.field-error[data-path=\"/interactions/0/friction\"]')", 15)
+            text = page.eval("document.querySelector('.field-error[data-path=\"/interactions/0/friction\"]').innerText")
+            assert "/interactions/0/friction" in text and len(text) > len("/interactions/0/friction") + 3, text
+            page.eval("document.querySelector('.field-error .path').click()")
+            sel = page.eval("(() => { const t = document.getElementById('scenario');"
+                            " return t.value.slice(t.selectionStart, t.selectionEnd); })()")
+            assert '"friction"' in sel, "clicking the path selects %r" % sel
+        step("invalid_scenario_shows_field_error", field_error)
+
+        def syntax_error():
+            set_editor(page, '{"time": {"dt": 1e-6,,}}')
+            page.wait_for("(document.querySelector('.field-error') || {}).innerText"
+                          " && document.querySelector('.field-error').innerText.includes('line 1')", 10)
+        step("syntax_error_shows_line", syntax_error)
+
+        def submit():
+            set_editor(page, SCENARIO)
+            page.eval("document.getElementById('tags').value = 'browser-test'")
+            page.wait_for("(document.querySelector('#validation .verdict') || {}).textContent === 'Valid scenario'", 15)
+            page.eval("document.getElementById('submit').click()")
+            page.wait_for("location.pathname.endsWith('index.html') && location.search.includes('highlight=')", 15)
+            return page.eval("new URLSearchParams(location.search).get('highlight')")
+        job_id = step("submit_page_submits", submit)
+        if not job_id:
+            return
+        row = "document.querySelector('tr[data-id=\"%s\"]')" % job_id
+
+        def listed():
+            page.wait_for("!!" + row, 15)
+            text = page.eval(row + ".innerText")
+            assert "quick-collision" in text and "browser-test" in text, text
+        step("jobs_page_lists_the_job", listed)
+
+        def completes():
+            page.wait_for(row + " && " + row + ".dataset.status === 'succeeded'"
+                          " && " + row + ".querySelector('.bar-text').textContent === '100%'", 60)
+        step("progress_reaches_100_percent", completes)
+
+        def filters():
+            page.eval("(() => { const s = document.getElementById('filter-status'); s.value = 'failed';"
+                      " s.dispatchEvent(new Event('change')); })()")
+            page.wait_for("!" + row + " && !!document.querySelector('#jobs-body td.empty')", 10)
+            page.eval("(() => { const s = document.getElementById('filter-status'); s.value = 'succeeded';"
+                      " s.dispatchEvent(new Event('change')); })()")
+            page.wait_for("!!" + row, 10)
+        step("status_filter", filters)
+
+        page.goto(URL + "/job.html?id=" + job_id)
+
+        def plots():
+            page.wait_for("document.getElementById('plot-note').textContent.includes('stats rows')", 20)
+            page.eval("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+            out = []
+            for p in ("ke", "contacts"):  # the first series is drawn in #1f6feb (plot.js)
+                n = count_near(shot(page, "#plot-" + p, "plot-" + p), (0x1f, 0x6f, 0xeb))
+                assert n >= 60, "#plot-%s: %d pixels of the series colour, want >= 60" % (p, n)
+                out.append(n)
+            return out
+        step("job_page_plots_render", plots)
+
+        def viewer():
+            page.wait_for("document.getElementById('frame-label').textContent.includes('frame 0')", 20)
+            page.eval("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+            return painted(page, "#viewer canvas", "viewer", 0.002)
+        step("job_page_viewer_renders", viewer)
+
+        def slider():
+            last = page.eval("document.getElementById('frame').max")
+            assert int(last) >= 1, "the slider has %s frames" % last
+            page.eval("(() => { const s = document.getElementById('frame'); s.value = s.max;"
+                      " s.dispatchEvent(new Event('input')); })()")
+            page.wait_for("document.getElementById('frame-label').textContent.startsWith('frame %s ')" % last, 10)
+        step("time_slider_shows_last_frame", slider)
+
+        def downloads():
+            href = page.eval("document.getElementById('dl-result').href")
+            assert href.endswith("/v1/jobs/%s/result" % job_id), href
+        step("download_links", downloads)
+
+        errors = [m for m in page.console() if m.startswith("exception") or m.startswith("console.error")]
+        if errors:
+            bad("no_script_errors", "; ".join(errors)[:600])
+        else:
+            ok("no_script_errors")
+    print("   (browser test took %.1f s)" % (time.monotonic() - t0))
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except CdpError as e:
+        bad("browser", e)
+    sys.exit(1 if failed else 0)

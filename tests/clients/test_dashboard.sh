@@ -1,0 +1,28 @@
+#!/bin/sh
+# test_dashboard.sh - the web dashboard in headless Chromium (Debian's chromium, driven over the
+# DevTools pipe by tests/clients/test_dashboard.py) against a real polydemd: submit, jobs list
+# with progress to 100%, plots and 3D viewer rendered, the field error of an invalid scenario.
+# SHOTS=DIR keeps the screenshots. Prints "N passed, N failed".
+# shellcheck source=tests/clients/lib.sh
+. tests/clients/lib.sh
+
+browser=""
+for b in chromium chromium-browser google-chrome; do
+    if command -v "$b" >/dev/null 2>&1; then browser=$b; break; fi
+done
+if [ -z "$browser" ]; then
+    bad chromium "no chromium to drive (make deps installs Debian's chromium)"
+elif [ ! -r /usr/share/javascript/three/three.min.js ]; then
+    bad libjs-three "/usr/share/javascript/three/three.min.js is missing (make deps installs libjs-three)"
+elif start_daemon; then
+    quick_scenario "$tmp/quick.json"
+    timeout 90 python3 -B tests/clients/test_dashboard.py "$URL" "$tmp/quick.json" >"$tmp/browser.out" 2>&1
+    rc=$?
+    cat "$tmp/browser.out"
+    passed=$((passed + $(grep -c '^ok ' "$tmp/browser.out")))
+    failed=$((failed + $(grep -c '^FAIL ' "$tmp/browser.out")))
+    if [ "$rc" -ne 0 ] && ! grep -q '^FAIL ' "$tmp/browser.out"; then
+        bad browser_test "exit $rc without a failed check (timeout or crash)"
+    fi
+fi
+summary
