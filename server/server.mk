@@ -1,0 +1,25 @@
+# server/server.mk - polydemd, the HTTP job service (included by the top Makefile).
+DEB_PACKAGES += libmicrohttpd-dev libsqlite3-dev sqlite3 curl python3-yaml libjs-three
+
+SERVER_SRC := $(wildcard server/*.c)
+SERVER_OBJ := $(patsubst server/%.c,$(BUILD)/server/%.o,$(SERVER_SRC))
+SERVER_LIBS := -lmicrohttpd -lsqlite3 -lpthread
+
+$(BUILD)/server/%.o: server/%.c $(wildcard server/*.h) engine/polydem.h
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) -c $< -o $@
+
+$(BUILD)/polydemd: $(SERVER_OBJ) $(BUILD)/libpolydem.a
+	$(CC) $(SERVER_OBJ) $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) $(SERVER_LIBS) -o $@
+
+all: $(BUILD)/polydemd
+check: $(BUILD)/polydemd
+
+# clang-format for the server's sources, run by `make format` and `make format-check`
+.PHONY: format-server format-check-server
+format: format-server
+format-check: format-check-server
+format-server:
+	clang-format -i server/*.c server/*.h
+format-check-server:
+	@clang-format --dry-run -Werror server/*.c server/*.h
