@@ -2,7 +2,7 @@
 // against time from /stats (refreshed while it runs; the progress events fill in until /stats
 // answers), the 3D viewer of any output frame with a time slider and play, and downloads.
 
-import { api, ApiError, jobPath, tokenUrl, watchJob, normalizeStats, FINISHED } from './api.js';
+import { api, ApiError, getToken, jobPath, watchJob, normalizeStats, FINISHED } from './api.js';
 import { el, statusBadge, progressBar, si, count, duration, date } from './format.js';
 import { mountNav, showMessage } from './nav.js';
 import { Plot } from './plot.js';
@@ -45,12 +45,33 @@ function renderJob() {
   $('job-error').textContent = job.error ? `error: ${job.error}` : '';
   const done = job.status === 'succeeded';
   for (const [a, route] of [['dl-result', '/result'], ['dl-xmf', '/result.xmf']]) {
-    $(a).href = done ? tokenUrl(jobPath(id, route)) : '#';
+    $(a).href = done ? jobPath(id, route) : '#';
     $(a).classList.toggle('disabled', !done);
     $(a).title = done ? '' : 'available when the job has succeeded';
   }
   $('cancel').hidden = FINISHED.includes(job.status);
   $('delete').hidden = !FINISHED.includes(job.status);
+}
+
+// With a token, a download goes through fetch (a link cannot send the Authorization header)
+// and is saved from a blob; without one the plain link streams it.
+async function download(ev) {
+  const a = ev.currentTarget;
+  if (!getToken() || a.classList.contains('disabled')) return;
+  ev.preventDefault();
+  const route = a.id === 'dl-xmf' ? '/result.xmf' : '/result';
+  try {
+    const r = await fetch(jobPath(id, route), { headers: { Authorization: `Bearer ${getToken()}` } });
+    if (!r.ok) throw new Error(`HTTP ${r.status}`);
+    const url = URL.createObjectURL(await r.blob());
+    const save = el('a', { href: url, download: `${id}${route === '/result' ? '.h5' : '.h5.xmf'}` });
+    document.body.append(save);
+    save.click();
+    save.remove();
+    setTimeout(() => URL.revokeObjectURL(url), 60000);
+  } catch (e) {
+    showMessage(`download: ${e.message}`);
+  }
 }
 
 function onJob(j) {
@@ -258,6 +279,8 @@ async function init() {
     goTo(parseInt(e.target.value, 10));
   });
   $('cancel').addEventListener('click', () => act('cancel'));
+  $('dl-result').addEventListener('click', download);
+  $('dl-xmf').addEventListener('click', download);
   $('delete').addEventListener('click', () => act('delete'));
   $('show-scenario').addEventListener('toggle', async (e) => {
     if (!e.target.open || $('scenario-text').textContent) return;

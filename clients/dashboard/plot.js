@@ -73,6 +73,7 @@ export class Plot {
     } else {
       if (y0 > 0) y0 = 0; // counts, energies and magnitudes read best from zero
       if (y0 === y1) { y0 -= Math.abs(y0) || 1; y1 += Math.abs(y1) || 1; }
+      y1 += 0.05 * (y1 - y0); // headroom: a flat line at the maximum stays off the frame
     }
     return { x0, x1, y0, y1 };
   }

@@ -101,7 +101,7 @@ function showSummary(r) {
       else if (k !== 'valid' && k !== 'ok') add(prefix + k.replace(/_/g, ' '), describe(k, v));
     }
   };
-  flat(r);
+  flat(r && r.summary ? { name: r.name, ...r.summary } : r);
   results.replaceChildren(el('p', { class: 'verdict' }, 'Valid scenario'), el('table', { class: 'kv' }, rows));
 }
 

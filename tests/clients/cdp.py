@@ -34,7 +34,8 @@ def find_chromium():
 
 
 class Browser:
-    def __init__(self, binary=None, width=1280, height=1000):
+    def __init__(self, binary=None, width=1280, height=1800):
+        self.width, self.height = width, height
         self.binary = binary or find_chromium()
         if not self.binary:
             raise CdpError("no chromium found (Debian: apt-get install chromium)")
@@ -132,6 +133,10 @@ class Browser:
         target = self.call("Target.createTarget", {"url": "about:blank"})["targetId"]
         session = self.call("Target.attachToTarget", {"targetId": target, "flatten": True})["sessionId"]
         page = Page(self, session)
+        # A viewport that holds the whole page: screenshots need no scrolling, and the layout
+        # does not change between measuring an element and photographing it.
+        page.call("Emulation.setDeviceMetricsOverride", {"width": self.width, "height": self.height,
+                                                          "deviceScaleFactor": 1, "mobile": False})
         page.call("Page.enable")
         page.call("Runtime.enable")
         page.goto(url)
@@ -195,7 +200,7 @@ class Page:
                          % json.dumps(selector))
 
     def screenshot(self, clip=None):
-        params = {"format": "png", "captureBeyondViewport": True}
+        params = {"format": "png", "captureBeyondViewport": False}
         if clip:
             params["clip"] = dict(clip, scale=1)
         return base64.b64decode(self.call("Page.captureScreenshot", params, timeout=30)["data"])
