@@ -5,6 +5,7 @@
  *                       [--no-filter] [--device N]
  *   polydem mesh-info FILE|builtin:NAME[:TRIANGLES[:SEED]]
  *   polydem validate SCENARIO.json [--json]
+ *   polydem run SCENARIO.json -o OUT.h5 [--device N] [--quiet] [--meshes]
  *   polydem devices [--json]
  *
  * Output is one JSON object on stdout, SI units, full double precision. Bad arguments or meshes
@@ -12,9 +13,12 @@
  */
 #include <errno.h>
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include <unistd.h>
 
 #include "polydem.h"
 
@@ -36,6 +40,10 @@ static const char *usage_text =
     "  validate SCENARIO.json [--json]\n"
     "      checks a scenario: every error with its JSON path (exit 1), or the particle count,\n"
     "      memory estimate and stable time step\n"
+    "  run SCENARIO.json -o OUT.h5 [--device N] [--quiet] [--meshes]\n"
+    "      runs a scenario on an OpenCL device (default: the first GPU, else the first\n"
+    "      device); writes the HDF5 result and OUT.h5.xmf for ParaView (--meshes adds every\n"
+    "      particle's surface per frame); a progress bar on a terminal; Ctrl-C cancels\n"
     "  devices [--json]\n"
     "      the OpenCL devices; N is what --device N takes\n"
     "\n"
@@ -292,6 +300,136 @@ static int cmd_validate(int argc, char **argv)
     return 0;
 }
 
+/* ---- run ---- */
+
+static volatile int run_cancel;
+
+static void on_interrupt(int sig)
+{
+    (void)sig;
+    run_cancel = 1;
+}
+
+typedef struct run_view {
+    int tty;
+} run_view;
+
+static void fmt_seconds(double s, char *out, size_t len)
+{
+    if (s < 0)
+        snprintf(out, len, "?");
+    else if (s < 120)
+        snprintf(out, len, "%.0f s", s);
+    else if (s < 7200)
+        snprintf(out, len, "%.0f min", s / 60);
+    else
+        snprintf(out, len, "%.1f h", s / 3600);
+}
+
+/* A progress bar on stderr when it is a terminal. */
+static int run_progress(const pd_progress *p, void *user)
+{
+    run_view *v = user;
+    if (!v->tty) return 0;
+    int width = 24, fill = (int)(p->fraction * width + 0.5);
+    char bar[32], eta[32];
+    for (int i = 0; i < width; i++)
+        bar[i] = i < fill ? '#' : '.';
+    bar[width] = 0;
+    fmt_seconds(p->eta_seconds, eta, sizeof eta);
+    fprintf(stderr,
+            "\r[%s] %3.0f%%  t %.4g/%.4g s  %.0f steps/s  ETA %s  %ld contacts  KE %.3g J   ", bar,
+            100 * p->fraction, p->sim_time, p->sim_duration, p->steps_per_second, eta, p->contacts,
+            p->kinetic_energy);
+    fflush(stderr);
+    return 0;
+}
+
+static void print_diags(const char *file, const pd_diags *d, const pd_error *err)
+{
+    if (d->n == 0) fprintf(stderr, "polydem: %s\n", err->msg);
+    for (int i = 0; i < d->n; i++)
+        fprintf(stderr, "%s: %s: %s\n", file, d->items[i].path, d->items[i].msg);
+    if (d->n) fprintf(stderr, "%s: %d error%s\n", file, d->n, d->n == 1 ? "" : "s");
+}
+
+static int cmd_run(int argc, char **argv)
+{
+    const char *file = NULL, *out = NULL;
+    int device = -1, quiet = 0, meshes = 0;
+    for (int i = 2; i < argc; i++) {
+        if (!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) {
+            if (++i >= argc) return fail("run: %s needs a file name%s", argv[i - 1], "");
+            out = argv[i];
+        } else if (!strcmp(argv[i], "--device")) {
+            char *end;
+            if (++i >= argc) return fail("run: --device needs a number%s%s", "", "");
+            long d = strtol(argv[i], &end, 10);
+            if (*end || end == argv[i] || d < 0 || d > 1000)
+                return fail("run: --device: expected a device number, got \"%s\"%s", argv[i], "");
+            device = (int)d;
+        } else if (!strcmp(argv[i], "--quiet")) {
+            quiet = 1;
+        } else if (!strcmp(argv[i], "--meshes")) {
+            meshes = 1;
+        } else if (argv[i][0] == '-' && argv[i][1]) {
+            return fail("run: unknown option \"%s\"%s", argv[i], "");
+        } else if (!file) {
+            file = argv[i];
+        } else {
+            return fail("run: one scenario file expected, got \"%s\" too%s", argv[i], "");
+        }
+    }
+    if (!file) return fail("run: a scenario file is required%s%s", "", "");
+    if (!out) return fail("run: -o OUT.h5 is required (the result file)%s%s", "", "");
+    pd_scenario *sc = NULL;
+    pd_diags d = {0, 0, NULL};
+    pd_error err = {0};
+    if (pd_scenario_load(file, &sc, &d, &err) != PD_OK) {
+        print_diags(file, &d, &err);
+        pd_diags_free(&d);
+        return 1;
+    }
+    pd_device *dev = NULL;
+    if (pd_device_open(device, &dev, &err) != PD_OK) {
+        fprintf(stderr, "polydem: %s\n", err.msg);
+        pd_scenario_destroy(sc);
+        return err.code == PD_EINVAL ? EXIT_USAGE : 1;
+    }
+    struct sigaction sa;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_interrupt;
+    sigaction(SIGINT, &sa, NULL);
+    sigaction(SIGTERM, &sa, NULL);
+    run_view view = {!quiet && isatty(2)};
+    pd_run_options opt = {0};
+    opt.output_path = out;
+    opt.progress = run_progress;
+    opt.user = &view;
+    opt.progress_interval = 0.25;
+    opt.cancel = &run_cancel;
+    opt.shape_meshes = meshes;
+    pd_progress fin;
+    int rc = pd_run(dev, sc, &opt, &fin, &err);
+    if (view.tty) fputc('\n', stderr);
+    if (rc == PD_OK) {
+        if (!quiet)
+            printf("%s: %lld steps (%.4g s simulated) of %ld particles on %s in %.3g s "
+                   "(%.3g steps/s); %lld frames; at the end %ld contacts, kinetic energy %.6g "
+                   "J\n",
+                   out, fin.steps_total, fin.sim_duration, fin.particles, pd_device_name(dev),
+                   fin.wall_seconds,
+                   fin.wall_seconds > 0 ? (double)fin.steps_total / fin.wall_seconds : 0,
+                   fin.frames, fin.contacts, fin.kinetic_energy);
+    } else {
+        fprintf(stderr, "polydem: %s: %s\n", file, err.msg);
+    }
+    pd_device_close(dev);
+    pd_scenario_destroy(sc);
+    if (rc == PD_ECANCELLED) return 130;
+    return rc == PD_OK ? 0 : 1;
+}
+
 static int cmd_devices(int argc, char **argv)
 {
     int json = argc == 3 && !strcmp(argv[2], "--json");
@@ -336,6 +474,7 @@ int main(int argc, char **argv)
     if (!strcmp(argv[1], "mesh-info")) return cmd_mesh_info(argc, argv);
     if (!strcmp(argv[1], "devices")) return cmd_devices(argc, argv);
     if (!strcmp(argv[1], "validate")) return cmd_validate(argc, argv);
+    if (!strcmp(argv[1], "run")) return cmd_run(argc, argv);
     fprintf(stderr, "polydem: unknown command \"%s\"\n\n%s", argv[1], usage_text);
     return EXIT_USAGE;
 }

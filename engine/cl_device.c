@@ -6,26 +6,14 @@
  * directory. Programs are compiled once per precision, on first use, and kept for the device's
  * life.
  */
-#define CL_TARGET_OPENCL_VERSION 120
-#include <CL/cl.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "cl_internal.h"
 #include "cl_sources.h"
 #include "overlap_run.h"
 
-struct pd_device {
-    cl_platform_id platform;
-    cl_device_id device;
-    cl_context ctx;
-    cl_command_queue queue;
-    cl_program prog[2]; /* [0] single, [1] double */
-    cl_kernel k_overlap[2];
-    int fp64;
-    char name[256];
-};
-
-static const char *cl_errstr(cl_int e)
+const char *cl_errstr(cl_int e)
 {
     switch (e) {
     case CL_DEVICE_NOT_FOUND:
@@ -52,9 +40,6 @@ static const char *cl_errstr(cl_int e)
         return "OpenCL error";
     }
 }
-
-#define CL_FAIL(err, what, e)                                                                      \
-    pd_error_set(err, PD_ECL, "opencl: %s failed: %s (%d)", what, cl_errstr(e), (int)(e))
 
 /* Every OpenCL device of every platform, in the order --device N counts them. */
 #define MAX_DEVICES 64
@@ -155,6 +140,12 @@ int pd_device_open(int index, pd_device **out, pd_error *err)
         free(dev);
         return CL_FAIL(err, "clCreateContext", e);
     }
+    cl_device_type dtype = 0;
+    cl_uint units = 1;
+    clGetDeviceInfo(pickd, CL_DEVICE_TYPE, sizeof dtype, &dtype, NULL);
+    clGetDeviceInfo(pickd, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units, NULL);
+    dev->gpu = (dtype & CL_DEVICE_TYPE_GPU) != 0;
+    dev->compute_units = units > 0 ? (int)units : 1;
     dev->queue = clCreateCommandQueue(dev->ctx, pickd, 0, &e);
     if (e != CL_SUCCESS) {
         clReleaseContext(dev->ctx);
@@ -171,6 +162,8 @@ void pd_device_close(pd_device *dev)
     for (int i = 0; i < 2; i++) {
         if (dev->k_overlap[i]) clReleaseKernel(dev->k_overlap[i]);
         if (dev->prog[i]) clReleaseProgram(dev->prog[i]);
+        for (int p = 0; p < CL_MAX_PROGRAMS; p++)
+            if (dev->cache[p][i]) clReleaseProgram(dev->cache[p][i]);
     }
     clReleaseCommandQueue(dev->queue);
     clReleaseContext(dev->ctx);
@@ -189,8 +182,8 @@ int pd_device_has_fp64(const pd_device *dev)
 static void to_real(void *buf, const double *x, size_t n, int dbl);
 
 /* Builds one embedded program; on failure the error quotes the build log. */
-static int build_program(pd_device *dev, const char *name, const char *src, int dbl,
-                         cl_program *out, pd_error *err)
+int cl_build_program(pd_device *dev, const char *name, const char *src, int dbl, cl_program *out,
+                     pd_error *err)
 {
     cl_int e;
     cl_program prog = clCreateProgramWithSource(dev->ctx, 1, &src, NULL, &e);
@@ -207,13 +200,33 @@ static int build_program(pd_device *dev, const char *name, const char *src, int 
     return PD_OK;
 }
 
+int cl_program_get(pd_device *dev, const char *name, int dbl, cl_program *out, pd_error *err)
+{
+    if (dbl && !dev->fp64)
+        return pd_error_set(err, PD_EINVAL,
+                            "opencl: device '%s' has no cl_khr_fp64; use \"precision\": \"single\"",
+                            dev->name);
+    int n = (int)(sizeof pd_cl_sources / sizeof pd_cl_sources[0]);
+    for (int i = 0; i < n && i < CL_MAX_PROGRAMS; i++)
+        if (strcmp(pd_cl_sources[i].name, name) == 0) {
+            if (!dev->cache[i][dbl]) {
+                int rc = cl_build_program(dev, name, pd_cl_sources[i].source, dbl,
+                                          &dev->cache[i][dbl], err);
+                if (rc != PD_OK) return rc;
+            }
+            *out = dev->cache[i][dbl];
+            return PD_OK;
+        }
+    return pd_error_set(err, PD_EINVAL, "opencl: no program named %s", name);
+}
+
 int pd_device_compile_all(pd_device *dev, pd_error *err)
 {
     for (size_t i = 0; i < sizeof pd_cl_sources / sizeof pd_cl_sources[0]; i++)
         for (int dbl = 0; dbl <= dev->fp64; dbl++) {
             cl_program p;
             int rc =
-                build_program(dev, pd_cl_sources[i].name, pd_cl_sources[i].source, dbl, &p, err);
+                cl_build_program(dev, pd_cl_sources[i].name, pd_cl_sources[i].source, dbl, &p, err);
             if (rc != PD_OK) return rc;
             clReleaseProgram(p);
         }
@@ -225,7 +238,7 @@ int pd_forces_cl(pd_device *dev, const double *in, int n, int dbl, double *out, 
     if (dbl && !dev->fp64)
         return pd_error_set(err, PD_ECL, "opencl: device '%s' has no cl_khr_fp64", dev->name);
     cl_program prog;
-    int rc = build_program(dev, "forces", pd_cl_source_forces, dbl, &prog, err);
+    int rc = cl_build_program(dev, "forces", pd_cl_source_forces, dbl, &prog, err);
     if (rc != PD_OK) return rc;
     size_t rs = dbl ? sizeof(double) : sizeof(float);
     void *hin = malloc(rs * 6 * (size_t)n), *hout = malloc(rs * 2 * (size_t)n);
@@ -275,7 +288,7 @@ static int device_program(pd_device *dev, int dbl, pd_error *err)
             err, PD_ECL, "opencl: device '%s' has no cl_khr_fp64; use single precision", dev->name);
     cl_program prog;
     cl_int e;
-    int rc = build_program(dev, "overlap", pd_cl_source_overlap, dbl, &prog, err);
+    int rc = cl_build_program(dev, "overlap", pd_cl_source_overlap, dbl, &prog, err);
     if (rc != PD_OK) return rc;
     cl_kernel k = clCreateKernel(prog, "overlap_pairs", &e);
     if (e != CL_SUCCESS) {
@@ -443,7 +456,7 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     if (dbl && !dev->fp64)
         return pd_error_set(err, PD_ECL, "opencl: device '%s' has no cl_khr_fp64", dev->name);
     cl_program prog;
-    int rc = build_program(dev, "narrow", pd_cl_source_narrow, dbl, &prog, err);
+    int rc = cl_build_program(dev, "narrow", pd_cl_source_narrow, dbl, &prog, err);
     if (rc != PD_OK) return rc;
     int nv = t->voff[t->nshape], nt = t->toff[t->nshape], maxv = 0, maxt = 0;
     for (int s = 0; s < t->nshape; s++) {

@@ -22,8 +22,7 @@ static int quat_normalised(const double q[4], double out[4])
     return 1;
 }
 
-/* Vertex -> triangle table of m in CSR form (see ovl_in in kernels/overlap.h). */
-static int vertex_triangles(const pd_mesh *m, int **off_out, int **vt_out)
+int ovl_vertex_triangles(const pd_mesh *m, int **off_out, int **vt_out)
 {
     int *off = calloc((size_t)m->nverts + 1, sizeof *off);
     int *vt = malloc(sizeof *vt * 3 * (size_t)m->ntris);
@@ -71,8 +70,8 @@ int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const 
     pd_mesh_mass_props(a, &ma);
     pd_mesh_mass_props(b, &mb);
     s->va = malloc(sizeof(double) * 3 * (size_t)a->nverts);
-    if (!s->va || vertex_triangles(a, &s->vt_a_off, &s->vt_a) != PD_OK ||
-        vertex_triangles(b, &s->vt_b_off, &s->vt_b) != PD_OK) {
+    if (!s->va || ovl_vertex_triangles(a, &s->vt_a_off, &s->vt_a) != PD_OK ||
+        ovl_vertex_triangles(b, &s->vt_b_off, &s->vt_b) != PD_OK) {
         ovl_setup_free(s);
         return pd_error_set(err, PD_ENOMEM, "overlap: out of memory");
     }

@@ -48,6 +48,10 @@ int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const 
                    int flags, ovl_setup *s, pd_error *err);
 void ovl_setup_free(ovl_setup *s);
 
+/* Vertex -> triangle table of m in CSR form (see ovl_in in kernels/overlap.h): the triangles of
+ * vertex i are (*vt)[(*off)[i] .. (*off)[i+1]-1]. Returns PD_OK or PD_ENOMEM; free both. */
+int ovl_vertex_triangles(const pd_mesh *m, int **off, int **vt);
+
 /* Converts a result in A's frame into a world-frame pd_contact. */
 void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *out);
 

@@ -20,13 +20,13 @@ extern "C" {
 
 enum {
     PD_OK = 0,
-    PD_EINVAL = -1, /* bad argument or bad input data */
-    PD_EIO = -2,    /* file could not be read or written */
-    PD_EMESH = -3,  /* mesh failed validation */
-    PD_ENOMEM = -4, /* allocation failed */
-    PD_ECL = -5,    /* OpenCL failure */
+    PD_EINVAL = -1,     /* bad argument or bad input data */
+    PD_EIO = -2,        /* file could not be read or written */
+    PD_EMESH = -3,      /* mesh failed validation */
+    PD_ENOMEM = -4,     /* allocation failed */
+    PD_ECL = -5,        /* OpenCL failure */
     PD_ECANCELLED = -6, /* a run was stopped through its cancel flag */
-    PD_EDIVERGED = -7,  /* a run produced NaN or runaway energy (the message names step, particle) */
+    PD_EDIVERGED = -7, /* a run produced NaN or runaway energy (the message names step, particle) */
 };
 
 typedef struct pd_error {
@@ -239,11 +239,11 @@ typedef struct pd_progress {
     double steps_per_second; /* wall-clock rate over the recent past */
     double eta_seconds;      /* wall-clock seconds left at that rate (-1 while unknown) */
     long particles;
-    long contacts;          /* contacts with positive overlap at the last stats step */
-    long broad_pairs;       /* candidate pairs of the broad phase at the last stats step */
-    double kinetic_energy;  /* J, translational + rotational, at the last stats step */
-    double wall_seconds;    /* since the run started */
-    long long frames;       /* output frames written so far */
+    long contacts;         /* contacts with positive overlap at the last stats step */
+    long broad_pairs;      /* candidate pairs of the broad phase at the last stats step */
+    double kinetic_energy; /* J, translational + rotational, at the last stats step */
+    double wall_seconds;   /* since the run started */
+    long long frames;      /* output frames written so far */
 } pd_progress;
 
 /*

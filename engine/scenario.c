@@ -326,6 +326,7 @@ static void parse_interactions(sc_parse *p, json_t *root)
                                        "damping",
                                        "model",
                                        "cohesion",
+                                       "cohesion_range",
                                        "normal_stiffness",
                                        "tangential_stiffness",
                                        "damping_coefficient",
@@ -377,6 +378,13 @@ static void parse_interactions(sc_parse *p, json_t *root)
         x.friction = num(p, v, at, "friction", 0, 0.5, NONNEG, "");
         x.damping = num(p, v, at, "damping", 0, 0, NONNEG, "");
         x.cohesion = num(p, v, at, "cohesion", 0, 0, NONNEG, "N/m");
+        x.cohesion_range = num(p, v, at, "cohesion_range", 0, 0, NONNEG, "m");
+        if (x.cohesion > 0 && !(x.cohesion_range > 0)) {
+            child(c, sizeof c, at, "cohesion_range");
+            diag(p, c,
+                 "required (> 0 m) when cohesion is set: how far beyond the surfaces the "
+                 "cohesive effect surface lies (seed 004 L_e = d_e - d_b)");
+        }
         if (x.model == SC_MODEL_LINEAR) {
             x.normal_stiffness = num(p, v, at, "normal_stiffness", 1, 1e4, POSITIVE, "N/m");
             x.tangential_stiffness = num(p, v, at, "tangential_stiffness", 0,

@@ -21,7 +21,7 @@ enum { SC_MODEL_HERTZ_MINDLIN = 0, SC_MODEL_LINEAR = 1 };
 typedef struct sc_interaction {
     int mat[2];
     int model;
-    double friction, damping, cohesion;
+    double friction, damping, cohesion, cohesion_range;
     double normal_stiffness, tangential_stiffness, damping_coefficient; /* linear model only */
 } sc_interaction;
 

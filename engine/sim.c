@@ -1,20 +1,310 @@
-/* sim.c - running a scenario (pd_run). Work in progress this session. */
-#include "polydem.h"
+/*
+ * sim.c - running a scenario (pd_run): the time loop around sim_step, the result file, stats
+ * rows, frames, progress reports, cancellation, and the divergence checks.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define PD_DOUBLE 1
+#include "contact_history.h" /* CH_WALL: walls as second bodies of pair keys */
+#include "integrate.h"       /* rotational energy and omega on the host, as the kernels do */
+#include "result_h5.h"
+#include "sim.h"
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Host copies of what stats rows and frames need. */
+typedef struct run_host {
+    double *x, *q, *v, *L, *w, *force, *info;
+    cl_ulong *keys;
+    size_t pair_cap;
+    double *wall_force;
+} run_host;
+
+static void host_free(run_host *h)
+{
+    free(h->x);
+    free(h->q);
+    free(h->v);
+    free(h->L);
+    free(h->w);
+    free(h->force);
+    free(h->info);
+    free(h->keys);
+    free(h->wall_force);
+}
+
+/* Reads positions, orientations, velocities and angular momenta; omega from L on the host. */
+static int read_state(sim *m, run_host *h, pd_error *err)
+{
+    size_t n = (size_t)m->n;
+    int rc = sim_read(m, m->x, 0, 3 * n, h->x, err);
+    if (rc == PD_OK) rc = sim_read(m, m->q, 0, 4 * n, h->q, err);
+    if (rc == PD_OK) rc = sim_read(m, m->v, 0, 3 * n, h->v, err);
+    if (rc == PD_OK) rc = sim_read(m, m->L, 0, 3 * n, h->L, err);
+    if (rc != PD_OK) return rc;
+    for (size_t i = 0; i < n; i++) {
+        const double *in = m->p->inertia + 3 * i;
+        pd_q4 q = q4(h->q[4 * i], h->q[4 * i + 1], h->q[4 * i + 2], h->q[4 * i + 3]);
+        pd_v3 wb = int_omega_body(q, v3_load(h->L, (int)i), v3(1 / in[0], 1 / in[1], 1 / in[2]));
+        v3_store(h->w, (int)i, q4_rotate(q, wb));
+    }
+    return PD_OK;
+}
+
+static double kinetic_energy(const sim *m, const run_host *h, int *max_particle)
+{
+    double ke = 0, best = -1;
+    for (int i = 0; i < m->n; i++) {
+        const double *v = h->v + 3 * i, *in = m->p->inertia + 3 * i;
+        pd_q4 q = q4(h->q[4 * i], h->q[4 * i + 1], h->q[4 * i + 2], h->q[4 * i + 3]);
+        double e = 0.5 * m->p->mass[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) +
+                   int_rot_energy(q, v3_load(h->L, i), v3(1 / in[0], 1 / in[1], 1 / in[2]));
+        ke += e;
+        if (!(e <= best)) { /* NaN wins, so it is the one named */
+            best = e;
+            *max_particle = i;
+        }
+    }
+    return ke;
+}
+
+/* Contacts, largest overlap ratio and wall forces from the last step's pairs. */
+static int contact_stats(sim *m, run_host *h, long *contacts, double *max_ratio, pd_error *err)
+{
+    size_t np = (size_t)m->n_old;
+    if (np > h->pair_cap) {
+        free(h->keys);
+        free(h->force);
+        free(h->info);
+        h->keys = malloc(sizeof(cl_ulong) * np);
+        h->force = malloc(sizeof(double) * 3 * np);
+        h->info = malloc(sizeof(double) * 2 * np);
+        h->pair_cap = h->keys && h->force && h->info ? np : 0;
+        if (!h->pair_cap) return pd_error_set(err, PD_ENOMEM, "run: out of memory for stats");
+    }
+    *contacts = 0;
+    *max_ratio = 0;
+    memset(h->wall_force, 0, sizeof(double) * 3 * (size_t)(m->nwall + 1));
+    if (np == 0) return PD_OK;
+    cl_int e = clEnqueueReadBuffer(m->dev->queue, m->old.keys, CL_TRUE, 0, sizeof(cl_ulong) * np,
+                                   h->keys, 0, NULL, NULL);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(keys)", e);
+    int rc = sim_read(m, m->force, 0, 3 * np, h->force, err);
+    if (rc == PD_OK) rc = sim_read(m, m->info, 0, 2 * np, h->info, err);
+    if (rc != PD_OK) return rc;
+    for (size_t c = 0; c < np; c++) {
+        if (h->info[2 * c] != 0) (*contacts)++;
+        if (h->info[2 * c + 1] > *max_ratio) *max_ratio = h->info[2 * c + 1];
+        unsigned second = (unsigned)(h->keys[c] & 0xffffffffu);
+        if (second >= CH_WALL) /* the force on the wall, summed in key order */
+            for (int k = 0; k < 3; k++)
+                h->wall_force[3 * (second - CH_WALL) + k] += h->force[3 * c + k];
+    }
+    return PD_OK;
+}
+
+/* Shapes, walls and particles into a new result file. */
+static int open_result(sim *m, const pd_run_options *opt, rh5_writer **out, pd_error *err)
+{
+    const pd_scenario *s = m->s;
+    int fields = 0;
+    if (s->output_fields & SC_OUT_VELOCITY) fields |= RH5_VELOCITY;
+    if (s->output_fields & SC_OUT_ANGULAR) fields |= RH5_ANGULAR_VELOCITY;
+    if (opt->shape_meshes) fields |= RH5_SHAPE_MESHES;
+    rh5_writer *w;
+    int rc = rh5_create(opt->output_path, s->json ? s->json : "{}", s->double_precision, s->dt,
+                        fields, &w, err);
+    if (rc != PD_OK) return rc;
+    pd_mesh *ball = NULL;
+    for (int i = 0; i < s->nshape && rc == PD_OK; i++) {
+        const sc_shape *sh = &s->shape[i];
+        if (sh->kind == SC_SHAPE_SPHERE) {
+            /* display tessellation: an 80-triangle icosphere of diameter 1 */
+            if (!ball && (rc = pd_mesh_builtin("icosphere", 80, 0, &ball, err)) != PD_OK) break;
+            double *v = malloc(sizeof(double) * 3 * (size_t)ball->nverts);
+            if (!v) {
+                rc = pd_error_set(err, PD_ENOMEM, "run: out of memory");
+                break;
+            }
+            for (int j = 0; j < 3 * ball->nverts; j++)
+                v[j] = 0.5 * ball->verts[j];
+            rc = rh5_add_shape(w, sh->name, "sphere", v, ball->nverts, ball->tris, ball->ntris,
+                               3.14159265358979323846 / 6, err);
+            free(v);
+        } else {
+            pd_mass_props mp;
+            pd_mesh_mass_props(sh->mesh, &mp);
+            rc = rh5_add_shape(w, sh->name, "mesh", sh->mesh->verts, sh->mesh->nverts,
+                               sh->mesh->tris, sh->mesh->ntris, mp.volume, err);
+        }
+    }
+    pd_mesh_destroy(ball);
+    for (int i = 0; i < s->nwall && rc == PD_OK; i++) {
+        const pd_mesh *me = s->wall[i].mesh;
+        rc = rh5_add_wall(w, s->wall[i].name, me->verts, me->nverts, me->tris, me->ntris, err);
+    }
+    if (rc == PD_OK)
+        rc = rh5_set_particles(w, m->n, m->p->shape, m->p->material, m->p->size, m->p->mass, err);
+    if (rc != PD_OK) {
+        rh5_abort(w);
+        return rc;
+    }
+    *out = w;
+    return PD_OK;
+}
+
+/* Energy a run may reach without something being wrong: 10x the initial kinetic energy plus
+ * what gravity can release across the scene plus what moving walls can impart. */
+static double energy_bound(const sim *m, double ke0)
+{
+    const pd_scenario *s = m->s;
+    double g = sqrt(s->gravity[0] * s->gravity[0] + s->gravity[1] * s->gravity[1] +
+                    s->gravity[2] * s->gravity[2]);
+    double ext = 0, mass = 0, vw = 0;
+    for (int k = 0; k < 3; k++)
+        ext += 1 / (m->inv_ext[k] * m->inv_ext[k]);
+    ext = sqrt(ext);
+    for (int i = 0; i < m->n; i++)
+        mass += m->p->mass[i];
+    for (int i = 0; i < s->nwall; i++) {
+        const double *v = s->wall[i].velocity, *w = s->wall[i].angular_velocity;
+        double sp = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) +
+                    sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * ext;
+        vw = sp > vw ? sp : vw;
+    }
+    return 10 * (ke0 + mass * g * ext + 0.5 * mass * 4 * vw * vw) + 1e-300;
+}
 
 int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_progress *final,
            pd_error *err)
 {
-    (void)dev;
-    (void)s;
-    (void)opt;
-    (void)final;
-    return pd_error_set(err, PD_EINVAL, "run: the simulation driver is not built yet");
-}
+    pd_progress pr;
+    memset(&pr, 0, sizeof pr);
+    pr.eta_seconds = -1;
+    if (final) *final = pr;
+    if (!dev || !s || !opt || !opt->output_path || !opt->output_path[0])
+        return pd_error_set(err, PD_EINVAL,
+                            "run: a device, a scenario and an output path are "
+                            "required");
+    sim *m = NULL;
+    rh5_writer *w = NULL;
+    run_host h;
+    memset(&h, 0, sizeof h);
+    double t_start = now_seconds();
+    int rc = sim_create(dev, s, &m, err);
+    if (rc != PD_OK) return rc;
+    size_t n = (size_t)m->n;
+    h.x = malloc(sizeof(double) * 3 * n);
+    h.q = malloc(sizeof(double) * 4 * n);
+    h.v = malloc(sizeof(double) * 3 * n);
+    h.L = malloc(sizeof(double) * 3 * n);
+    h.w = malloc(sizeof(double) * 3 * n);
+    h.wall_force = calloc(3 * ((size_t)m->nwall + 1), sizeof(double));
+    if (!h.x || !h.q || !h.v || !h.L || !h.w || !h.wall_force) {
+        rc = pd_error_set(err, PD_ENOMEM, "run: out of memory for %zu particles", n);
+        goto done;
+    }
+    if ((rc = open_result(m, opt, &w, err)) != PD_OK) goto done;
 
-int pd_device_selftest(pd_device *dev, char *report, size_t report_len, pd_error *err)
-{
-    (void)dev;
-    (void)report;
-    (void)report_len;
-    return pd_error_set(err, PD_EINVAL, "selftest: not built yet");
+    long long steps = llround(s->duration / s->dt);
+    long long stats_every = llround(s->stats_interval / s->dt);
+    long long frame_every = llround(s->output_interval / s->dt);
+    if (stats_every < 1) stats_every = 1;
+    if (frame_every < 1) frame_every = 1;
+    pr.steps_total = steps;
+    pr.sim_duration = (double)steps * s->dt;
+    pr.particles = m->n;
+    double interval = opt->progress_interval > 0 ? opt->progress_interval : 0.5;
+    double last_report = now_seconds(), rate_t0 = last_report, ebound = 0;
+    long long rate_s0 = 0;
+
+    if ((rc = sim_forces(m, err)) != PD_OK) goto done;
+    for (long long step = 0;; step++) {
+        int stats_due = step % stats_every == 0 || step == steps;
+        int frame_due = step % frame_every == 0 || step == steps;
+        double t = (double)step * s->dt;
+        if (stats_due || frame_due) {
+            if ((rc = read_state(m, &h, err)) != PD_OK) goto done;
+            int worst = 0;
+            double ke = kinetic_energy(m, &h, &worst);
+            if (step == 0) ebound = energy_bound(m, ke);
+            if (!isfinite(ke) || ke > ebound) {
+                rc = pd_error_set(err, PD_EDIVERGED,
+                                  "run diverged at step %lld (t = %.6g s): %s; particle %d has "
+                                  "the largest kinetic energy. Reduce dt (now %g s) or check "
+                                  "stiffness and damping",
+                                  step, t,
+                                  isfinite(ke) ? "kinetic energy ran away past 10x what the "
+                                                 "scenario can supply"
+                                               : "kinetic energy is not finite",
+                                  worst, s->dt);
+                goto done;
+            }
+            pr.kinetic_energy = ke;
+        }
+        if (stats_due) {
+            long contacts;
+            double ratio;
+            if ((rc = contact_stats(m, &h, &contacts, &ratio, err)) != PD_OK) goto done;
+            pr.contacts = contacts;
+            pr.broad_pairs = m->n_old;
+            rc = rh5_write_stats(w, t, step, pr.kinetic_energy, contacts, m->n_old, ratio,
+                                 m->nwall ? h.wall_force : NULL, err);
+            if (rc != PD_OK) goto done;
+        }
+        if (frame_due) {
+            rc = rh5_write_frame(w, t, step, h.x, h.q, h.v, h.w, err);
+            if (rc != PD_OK) goto done;
+            pr.frames++;
+        }
+        pr.step = step;
+        pr.sim_time = t;
+        pr.fraction = steps > 0 ? (double)step / (double)steps : 1;
+        double tn = now_seconds();
+        pr.wall_seconds = tn - t_start;
+        int cancel = opt->cancel && *opt->cancel;
+        if (tn - last_report >= interval || step == steps) {
+            if (tn > rate_t0 && step > rate_s0) {
+                pr.steps_per_second = (double)(step - rate_s0) / (tn - rate_t0);
+                pr.eta_seconds = (double)(steps - step) / pr.steps_per_second;
+            }
+            rate_t0 = tn;
+            rate_s0 = step;
+            last_report = tn;
+            if (opt->progress && opt->progress(&pr, opt->user)) cancel = 1;
+        }
+        if (step == steps) break;
+        if (cancel) {
+            rc =
+                pd_error_set(err, PD_ECANCELLED, "run cancelled at step %lld of %lld", step, steps);
+            goto done;
+        }
+        int bad = -1;
+        if ((rc = sim_step(m, &bad, err)) != PD_OK) goto done;
+        if (bad >= 0) {
+            rc = pd_error_set(err, PD_EDIVERGED,
+                              "run diverged at step %lld (t = %.6g s): particle %d has a "
+                              "position, velocity or angular momentum that is not finite. Reduce "
+                              "dt (now %g s) or check the material parameters",
+                              step + 1, (double)(step + 1) * s->dt, bad, s->dt);
+            goto done;
+        }
+    }
+    rc = rh5_close(w, err);
+    w = NULL;
+done:
+    if (w) rh5_abort(w);
+    pr.wall_seconds = now_seconds() - t_start;
+    if (final) *final = pr;
+    host_free(&h);
+    sim_destroy(m);
+    return rc;
 }

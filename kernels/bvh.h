@@ -116,36 +116,42 @@ PD_FN int bvh_boxes_meet(PD_GLOBAL const pd_real *a, const pd_real *q)
 }
 
 /*
- * Leaves (sorted positions) whose boxes meet query box q (lo xyz, hi xyz), written to out up to
- * cap; returns how many there are (more than cap means the caller retries with more room).
+ * Leaves whose boxes meet query box q (lo xyz, hi xyz), as the ids idx[sorted position] (or the
+ * sorted positions when idx is NULL), keeping only ids above `after` (-1: all). They are written
+ * to out up to cap; returns how many there are (more than cap means the caller retries with more
+ * room), -1 when the stack would overflow (it cannot for an LBVH of 2^31 leaves).
  */
-PD_FN int bvh_query(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *left,
-                    PD_GLOBAL const int *right, int n, const pd_real *q, PD_GLOBAL int *out,
-                    int cap)
+PD_FN int bvh_query_after(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *left,
+                          PD_GLOBAL const int *right, int n, const pd_real *q,
+                          PD_GLOBAL const int *idx, int after, PD_GLOBAL int *out, int cap)
 {
     int count = 0;
-    if (n == 1) {
-        if (bvh_boxes_meet(box, q)) {
-            if (cap > 0) out[0] = 0;
-            count = 1;
-        }
-        return count;
-    }
     int stack[BVH_STACK], top = 0;
     stack[top++] = 0;
     while (top > 0) {
         int node = stack[--top];
         if (!bvh_boxes_meet(box + 6 * node, q)) continue;
         if (node >= n - 1) {
-            if (count < cap) out[count] = node - (n - 1);
-            count++;
+            int k = node - (n - 1), id = idx ? idx[k] : k;
+            if (id > after) {
+                if (count < cap) out[count] = id;
+                count++;
+            }
             continue;
         }
-        if (top + 2 > BVH_STACK) return -1; /* deeper than any LBVH of 2^31 leaves */
+        if (top + 2 > BVH_STACK) return -1;
         stack[top++] = right[node];
         stack[top++] = left[node];
     }
     return count;
+}
+
+/* Leaves (sorted positions) whose boxes meet q; see bvh_query_after. */
+PD_FN int bvh_query(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *left,
+                    PD_GLOBAL const int *right, int n, const pd_real *q, PD_GLOBAL int *out,
+                    int cap)
+{
+    return bvh_query_after(box, left, right, n, q, 0, -1, out, cap);
 }
 
 #endif /* PD_BVH_H */

@@ -2,8 +2,8 @@
  * forces.cl - per-contact force evaluation (the forces stage), one work-item per contact.
  * Built with -DPD_DOUBLE=0 or 1. hertz_volume_normal: for each contact, the normal force of
  * thesis eq. 4.16 from (V, delta, E*, m*, gamma, vn) packed as 6 reals; writes F_n and k_n.
- * gather_forces: per particle, the deterministic sum of its contacts' forces and torques
- * (kernels/contact_history.h), written as 3 + 3 reals.
+ * body_forces: per particle, the deterministic sum of its contacts' forces and torques
+ * (kernels/contact_history.h) plus gravity and drag, written as 3 + 3 reals.
  */
 #include "pd_real.h"
 #include "contact_force.h"
@@ -19,16 +19,29 @@ __kernel void hertz_volume_normal(__global const pd_real *in, int n, __global pd
     out[2 * g + 1] = kn;
 }
 
-__kernel void gather_forces(__global const ch_key *keys, __global const int *by_second,
-                            __global const ch_key *swapped, int ncontacts,
-                            __global const pd_real *force, __global const pd_real *tq_first,
-                            __global const pd_real *tq_second, int nparticles,
-                            __global pd_real *f_out, __global pd_real *t_out)
+/*
+ * Total force and torque on each particle p: its contacts' sum in a fixed order (ch_gather), plus
+ * gravity m g (seed 004 eq. 2.10) and Stokes drag in a uniform flow, F_d = 3 pi mu d (u_f - u)
+ * (eqs. 1.2 and 2.9: m / tau_p with tau_p = rho d^2 / (18 mu); for a polyhedron d is its
+ * volume-equivalent diameter). Drag exerts no torque in this model.
+ */
+__kernel void body_forces(__global const ch_key *keys, __global const int *by_second,
+                          __global const ch_key *swapped, int ncontacts,
+                          __global const pd_real *force, __global const pd_real *tq_first,
+                          __global const pd_real *tq_second, int nparticles,
+                          __global const pd_real *inv_m, __global const pd_real *size,
+                          __global const pd_real *v, pd_real gx, pd_real gy, pd_real gz,
+                          pd_real drag_mu, pd_real ufx, pd_real ufy, pd_real ufz,
+                          __global pd_real *f_out, __global pd_real *t_out)
 {
     int p = (int)get_global_id(0);
     if (p >= nparticles) return;
     pd_v3 f, t;
     ch_gather((unsigned)p, keys, by_second, swapped, ncontacts, force, tq_first, tq_second, &f, &t);
+    f = v3_add(f, v3_scale(v3(gx, gy, gz), PD_R(1) / inv_m[p]));
+    if (drag_mu > PD_R(0))
+        f = v3_add(f, v3_scale(v3_sub(v3(ufx, ufy, ufz), v3_load(v, p)),
+                               PD_R(3) * CF_PI * drag_mu * size[p]));
     v3_store(f_out, p, f);
     v3_store(t_out, p, t);
 }

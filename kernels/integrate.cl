@@ -17,19 +17,29 @@ __kernel void integrate_kick(__global pd_real *v, __global pd_real *L, __global 
     v3_store(L, i, int_kick(v3_load(L, i), v3_load(torque, i), PD_R(1), h));
 }
 
-/* Drift: x += v dt, and q turned by Euler's equations at constant L. */
+/*
+ * Drift: x += v dt, and q turned by Euler's equations at constant L; omega receives the world
+ * angular velocity at the new orientation (what the contact stage uses for surface velocities).
+ * A particle whose position, velocity or angular momentum is not finite is reported by the
+ * lowest such index in *bad (atomic_min: the host names the first one).
+ */
 __kernel void integrate_drift(__global pd_real *x, __global const pd_real *v, __global pd_real *q,
-                              __global const pd_real *L, __global const pd_real *inv_i, int n,
-                              pd_real dt)
+                              __global const pd_real *L, __global const pd_real *inv_i,
+                              __global pd_real *omega, int n, pd_real dt, __global int *bad)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
-    v3_store(x, i, v3_add(v3_load(x, i), v3_scale(v3_load(v, i), dt)));
+    pd_v3 xi = v3_add(v3_load(x, i), v3_scale(v3_load(v, i), dt)), Li = v3_load(L, i);
+    v3_store(x, i, xi);
     __global pd_real *qi = q + 4 * i;
-    pd_q4 r =
-        int_drift_rotation(q4(qi[0], qi[1], qi[2], qi[3]), v3_load(L, i), v3_load(inv_i, i), dt);
+    pd_v3 ii = v3_load(inv_i, i);
+    pd_q4 r = int_drift_rotation(q4(qi[0], qi[1], qi[2], qi[3]), Li, ii, dt);
     qi[0] = r.w;
     qi[1] = r.x;
     qi[2] = r.y;
     qi[3] = r.z;
+    pd_v3 wb = int_omega_body(r, Li, ii);
+    v3_store(omega, i, q4_rotate(r, wb));
+    pd_real s = xi.x + xi.y + xi.z + v3_dot(v3_load(v, i), v3(1, 1, 1)) + Li.x + Li.y + Li.z;
+    if (!isfinite(s)) atomic_min(bad, i);
 }

@@ -1,0 +1,83 @@
+/*
+ * sim.h - the state of one run on a device and its stages (engine-internal; the public face is
+ * pd_run in polydem.h).
+ *
+ * Bodies are the n particles followed by the walls: every per-body array (x, q, v, w, size,
+ * inv_m, shape, material) has n + nwall entries, so a wall is a body of infinite mass whose
+ * shape is its own mesh (in metres about its centroid, size 1) and whose pose the host sets
+ * from the wall's prescribed motion. Per-particle arrays (L, inv_i, f, t) have n entries.
+ *
+ * A step (sim_step.c), all on the device:
+ *   kick (dt/2) -> drift -> [walls moved] -> forces -> kick (dt/2)
+ * where forces = boxes -> Morton codes -> radix sort -> LBVH nodes -> refit -> traversal
+ * (count, scan, write: sorted keys) -> contact forces with history -> gather by particle.
+ * The host reads one int per step (the number of candidate pairs, to size the pair arrays) and
+ * the divergence flag; everything else stays on the device until a stats row or frame is due.
+ */
+#ifndef PD_SIM_H
+#define PD_SIM_H
+
+#include "cl_internal.h"
+#include "device_sort.h"
+#include "particles.h"
+#include "scenario.h"
+
+typedef struct sim_pairs {
+    cl_mem keys, spring, kt; /* these three carry over as the next step's history */
+    size_t cap;              /* capacity in pairs */
+} sim_pairs;
+
+typedef struct sim {
+    pd_device *dev;
+    const pd_scenario *s;
+    int dbl;   /* double precision on the device */
+    size_t rs; /* sizeof(pd_real) on the device */
+    int n, nwall, nbody, nmat, nshape;
+    double dt;
+    long long step;
+    sc_particles *p;    /* initial state; mass, inertia, size on the host */
+    double *wall_c0;    /* 3 per wall: the wall mesh's centroid at t = 0 */
+    double *wall_local; /* the wall meshes about their centroids (concatenated), for boxes */
+    int *wall_voff;
+    int walls_move;
+    double margin;            /* added to every box: half the largest cohesion range, m */
+    double lo[3], inv_ext[3]; /* Morton scene box */
+
+    /* bodies */
+    cl_mem x, q, v, w, size, inv_m, shape, material;
+    /* particles */
+    cl_mem L, inv_i, f, t;
+    /* shapes and materials */
+    cl_mem vert, tri, voff, toff, vt_off, vt, unit_vol, kind, radius_ratio, params;
+    /* broad phase */
+    cl_mem pbox, wbox, tbox, left, right, parent, arrivals, codes, idx, codes_tmp, idx_tmp;
+    cl_mem count, offset, status;
+    cl_int status_host[2]; /* [1]: lowest particle found not finite, INT_MAX when none */
+    /* pairs: current and last step's (history) */
+    sim_pairs cur, old;
+    int npairs, n_old;
+    cl_mem force, tq1, tq2, info, ids, swapped, by_second, swapped_tmp, by_second_tmp;
+    size_t work_cap; /* capacity of the per-pair work arrays above */
+    /* overlap scratch, per contact work-item */
+    cl_mem iscr, rscr;
+    int ilen, rlen, pts_cap, nwork;
+    /* kernels */
+    cl_kernel k_boxes, k_codes, k_leaves, k_nodes, k_refit, k_count, k_write, k_contact, k_body,
+        k_kick, k_drift;
+    dsort sort;
+} sim;
+
+/* sim_state.c: set-up, host <-> device copies, wall motion */
+int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err);
+void sim_destroy(sim *m);
+/* Reads cnt reals of buffer b from offset `first` (in reals) into doubles. */
+int sim_read(sim *m, cl_mem b, size_t first, size_t cnt, double *out, pd_error *err);
+int sim_write(sim *m, cl_mem b, size_t first, size_t cnt, const double *in, pd_error *err);
+/* Sets the walls' poses, velocities and boxes for time t (when they move). */
+int sim_walls_at(sim *m, double t, pd_error *err);
+
+/* sim_step.c: the stages */
+int sim_forces(sim *m, pd_error *err);
+int sim_step(sim *m, int *bad_particle, pd_error *err);
+
+#endif

@@ -1,0 +1,536 @@
+/*
+ * sim_state.c - setting up a run on a device: bodies, shape and material tables, the broad
+ * phase's buffers and the kernels; host <-> device copies; the walls' prescribed motion.
+ */
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define PD_DOUBLE 1
+#include "contact_pair.h" /* cp_* parameter layout, overlap scratch sizes, force-law helpers */
+#include "overlap_run.h"
+#include "sim.h"
+
+static const double PI = 3.14159265358979323846;
+
+static cl_mem mk(sim *m, size_t bytes, int *ok, cl_int *e)
+{
+    if (!*ok) return NULL;
+    cl_mem b = clCreateBuffer(m->dev->ctx, CL_MEM_READ_WRITE, bytes ? bytes : 16, NULL, e);
+    if (*e != CL_SUCCESS) *ok = 0;
+    return b;
+}
+
+int sim_write(sim *m, cl_mem b, size_t first, size_t cnt, const double *in, pd_error *err)
+{
+    if (cnt == 0) return PD_OK;
+    void *h = malloc(m->rs * cnt);
+    if (!h) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
+    for (size_t i = 0; i < cnt; i++) {
+        if (m->dbl)
+            ((double *)h)[i] = in[i];
+        else
+            ((float *)h)[i] = (float)in[i];
+    }
+    cl_int e = clEnqueueWriteBuffer(m->dev->queue, b, CL_TRUE, m->rs * first, m->rs * cnt, h, 0,
+                                    NULL, NULL);
+    free(h);
+    return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueWriteBuffer", e);
+}
+
+int sim_read(sim *m, cl_mem b, size_t first, size_t cnt, double *out, pd_error *err)
+{
+    if (cnt == 0) return PD_OK;
+    void *h = malloc(m->rs * cnt);
+    if (!h) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
+    cl_int e = clEnqueueReadBuffer(m->dev->queue, b, CL_TRUE, m->rs * first, m->rs * cnt, h, 0,
+                                   NULL, NULL);
+    if (e == CL_SUCCESS)
+        for (size_t i = 0; i < cnt; i++)
+            out[i] = m->dbl ? ((double *)h)[i] : (double)((float *)h)[i];
+    free(h);
+    return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueReadBuffer", e);
+}
+
+static int write_ints(sim *m, cl_mem b, size_t cnt, const int *in, pd_error *err)
+{
+    if (cnt == 0) return PD_OK;
+    cl_int e =
+        clEnqueueWriteBuffer(m->dev->queue, b, CL_TRUE, 0, sizeof(int) * cnt, in, 0, NULL, NULL);
+    return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueWriteBuffer", e);
+}
+
+/* Quaternion of a rotation vector (rad). */
+static void quat_of(const double phi[3], double q[4])
+{
+    double a = sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]);
+    double s = a > 0 ? sin(0.5 * a) / a : 0.5;
+    q[0] = cos(0.5 * a);
+    for (int k = 0; k < 3; k++)
+        q[k + 1] = phi[k] * s;
+}
+
+static void rotate(const double q[4], const double v[3], double out[3])
+{
+    double r[3][3];
+    pd_quat_to_matrix(q, r);
+    for (int i = 0; i < 3; i++)
+        out[i] = r[i][0] * v[0] + r[i][1] * v[1] + r[i][2] * v[2];
+}
+
+/*
+ * A wall translates with its velocity and turns at its angular velocity about its center, which
+ * moves with it: at time t its centroid is center + v t + R(omega t) (c0 - center).
+ */
+int sim_walls_at(sim *m, double t, pd_error *err)
+{
+    int W = m->nwall;
+    if (W == 0) return PD_OK;
+    double *x = malloc(sizeof(double) * 3 * W), *q = malloc(sizeof(double) * 4 * W);
+    double *v = malloc(sizeof(double) * 3 * W), *w = malloc(sizeof(double) * 3 * W);
+    double *box = malloc(sizeof(double) * 6 * W);
+    int rc = PD_OK;
+    if (!x || !q || !v || !w || !box) {
+        rc = pd_error_set(err, PD_ENOMEM, "run: out of memory");
+        goto done;
+    }
+    for (int i = 0; i < W; i++) {
+        const sc_wall *wl = &m->s->wall[i];
+        double phi[3], rel[3], rr[3];
+        for (int k = 0; k < 3; k++) {
+            phi[k] = wl->angular_velocity[k] * t;
+            rel[k] = m->wall_c0[3 * i + k] - wl->center[k];
+        }
+        quat_of(phi, q + 4 * i);
+        rotate(q + 4 * i, rel, rr);
+        for (int k = 0; k < 3; k++)
+            x[3 * i + k] = wl->center[k] + wl->velocity[k] * t + rr[k];
+        const double *om = wl->angular_velocity;
+        double vr[3] = {om[1] * rr[2] - om[2] * rr[1], om[2] * rr[0] - om[0] * rr[2],
+                        om[0] * rr[1] - om[1] * rr[0]};
+        for (int k = 0; k < 3; k++) {
+            v[3 * i + k] = wl->velocity[k] + vr[k];
+            w[3 * i + k] = om[k];
+            box[6 * i + k] = INFINITY;
+            box[6 * i + 3 + k] = -INFINITY;
+        }
+        for (int j = m->wall_voff[i]; j < m->wall_voff[i + 1]; j++) {
+            double p[3];
+            rotate(q + 4 * i, m->wall_local + 3 * j, p);
+            for (int k = 0; k < 3; k++) {
+                double c = p[k] + x[3 * i + k];
+                box[6 * i + k] = fmin(box[6 * i + k], c - m->margin);
+                box[6 * i + 3 + k] = fmax(box[6 * i + 3 + k], c + m->margin);
+            }
+        }
+    }
+    size_t b0 = (size_t)m->n;
+    rc = sim_write(m, m->x, 3 * b0, 3 * (size_t)W, x, err);
+    if (rc == PD_OK) rc = sim_write(m, m->q, 4 * b0, 4 * (size_t)W, q, err);
+    if (rc == PD_OK) rc = sim_write(m, m->v, 3 * b0, 3 * (size_t)W, v, err);
+    if (rc == PD_OK) rc = sim_write(m, m->w, 3 * b0, 3 * (size_t)W, w, err);
+    if (rc == PD_OK) rc = sim_write(m, m->wbox, 0, 6 * (size_t)W, box, err);
+done:
+    free(x);
+    free(q);
+    free(v);
+    free(w);
+    free(box);
+    return rc;
+}
+
+/* Shape tables: the scenario's shapes (size 1, body frame), then one per wall (metres, about
+ * the wall's centroid). Also the largest triangle counts for the overlap scratch. */
+static int upload_shapes(sim *m, pd_error *err)
+{
+    const pd_scenario *s = m->s;
+    int ns = s->nshape + s->nwall;
+    const pd_mesh **mesh = calloc((size_t)ns, sizeof *mesh);
+    int *voff = calloc((size_t)ns + 1, sizeof(int)), *toff = calloc((size_t)ns + 1, sizeof(int));
+    int *kind = calloc((size_t)ns, sizeof(int));
+    double *uvol = calloc((size_t)ns, sizeof(double)), *rr = calloc((size_t)ns, sizeof(double));
+    double *vert = NULL;
+    int *tri = NULL, *vt_off = NULL, *vt = NULL, rc = PD_OK;
+    if (!mesh || !voff || !toff || !kind || !uvol || !rr) goto oom;
+    int max_ta = 0, max_va = 0, max_tb = 0, max_vb = 0;
+    for (int i = 0; i < ns; i++) {
+        if (i < s->nshape) {
+            const sc_shape *sh = &s->shape[i];
+            mesh[i] = sh->mesh;
+            kind[i] = sh->kind == SC_SHAPE_SPHERE;
+            rr[i] = sh->radius_ratio;
+        } else {
+            mesh[i] = s->wall[i - s->nshape].mesh;
+        }
+        int nv = mesh[i] && !kind[i] ? mesh[i]->nverts : 0;
+        int nt = mesh[i] && !kind[i] ? mesh[i]->ntris : 0;
+        voff[i + 1] = voff[i] + nv;
+        toff[i + 1] = toff[i] + nt;
+        if (i < s->nshape) {
+            max_ta = nt > max_ta ? nt : max_ta;
+            max_va = nv > max_va ? nv : max_va;
+        }
+        max_tb = nt > max_tb ? nt : max_tb;
+        max_vb = nv > max_vb ? nv : max_vb;
+    }
+    vert = malloc(sizeof(double) * 3 * ((size_t)voff[ns] + 1));
+    tri = malloc(sizeof(int) * 3 * ((size_t)toff[ns] + 1));
+    vt_off = malloc(sizeof(int) * ((size_t)voff[ns] + ns + 1));
+    vt = malloc(sizeof(int) * 3 * ((size_t)toff[ns] + 1));
+    m->wall_local = malloc(sizeof(double) * 3 * ((size_t)voff[ns] - voff[s->nshape] + 1));
+    m->wall_voff = calloc((size_t)s->nwall + 1, sizeof(int));
+    m->wall_c0 = calloc(3 * (size_t)s->nwall + 1, sizeof(double));
+    if (!vert || !tri || !vt_off || !vt || !m->wall_local || !m->wall_voff || !m->wall_c0) goto oom;
+    for (int i = 0; i < ns; i++) {
+        const pd_mesh *me = mesh[i];
+        if (kind[i]) {
+            uvol[i] = PI / 6;
+            vt_off[voff[i] + i] = 0;
+            continue;
+        }
+        pd_mass_props mp;
+        pd_mesh_mass_props(me, &mp);
+        uvol[i] = mp.volume;
+        double c[3] = {0, 0, 0};
+        if (i >= s->nshape) { /* walls: about the centroid */
+            int wi = i - s->nshape;
+            memcpy(c, mp.centroid, sizeof c);
+            memcpy(m->wall_c0 + 3 * wi, c, sizeof c);
+            m->wall_voff[wi + 1] = m->wall_voff[wi] + me->nverts;
+        }
+        for (int j = 0; j < me->nverts; j++)
+            for (int k = 0; k < 3; k++) {
+                double p = me->verts[3 * j + k] - c[k];
+                vert[3 * (voff[i] + j) + k] = p;
+                if (i >= s->nshape) m->wall_local[3 * (m->wall_voff[i - s->nshape] + j) + k] = p;
+            }
+        memcpy(tri + 3 * toff[i], me->tris, sizeof(int) * 3 * me->ntris);
+        int *off, *list;
+        if (ovl_vertex_triangles(me, &off, &list) != PD_OK) goto oom;
+        memcpy(vt_off + voff[i] + i, off, sizeof(int) * ((size_t)me->nverts + 1));
+        memcpy(vt + 3 * toff[i], list, sizeof(int) * 3 * me->ntris);
+        free(off);
+        free(list);
+    }
+    m->nshape = ns;
+    m->pts_cap = ovl_pts_cap(max_ta, max_tb);
+    m->ilen = ovl_iscratch_len(max_ta, max_tb, max_va, max_vb);
+    m->rlen = ovl_rscratch_len(max_va, max_vb, max_tb, m->pts_cap);
+    cl_int e = CL_SUCCESS;
+    int ok = 1;
+    m->vert = mk(m, m->rs * 3 * (size_t)voff[ns], &ok, &e);
+    m->tri = mk(m, sizeof(int) * 3 * (size_t)toff[ns], &ok, &e);
+    m->voff = mk(m, sizeof(int) * ((size_t)ns + 1), &ok, &e);
+    m->toff = mk(m, sizeof(int) * ((size_t)ns + 1), &ok, &e);
+    m->vt_off = mk(m, sizeof(int) * ((size_t)voff[ns] + ns), &ok, &e);
+    m->vt = mk(m, sizeof(int) * 3 * (size_t)toff[ns], &ok, &e);
+    m->unit_vol = mk(m, m->rs * (size_t)ns, &ok, &e);
+    m->kind = mk(m, sizeof(int) * (size_t)ns, &ok, &e);
+    m->radius_ratio = mk(m, m->rs * (size_t)ns, &ok, &e);
+    if (!ok) {
+        rc = CL_FAIL(err, "clCreateBuffer(shapes)", e);
+        goto done;
+    }
+    rc = sim_write(m, m->vert, 0, 3 * (size_t)voff[ns], vert, err);
+    if (rc == PD_OK) rc = write_ints(m, m->tri, 3 * (size_t)toff[ns], tri, err);
+    if (rc == PD_OK) rc = write_ints(m, m->voff, (size_t)ns + 1, voff, err);
+    if (rc == PD_OK) rc = write_ints(m, m->toff, (size_t)ns + 1, toff, err);
+    if (rc == PD_OK) rc = write_ints(m, m->vt_off, (size_t)voff[ns] + ns, vt_off, err);
+    if (rc == PD_OK) rc = write_ints(m, m->vt, 3 * (size_t)toff[ns], vt, err);
+    if (rc == PD_OK) rc = sim_write(m, m->unit_vol, 0, (size_t)ns, uvol, err);
+    if (rc == PD_OK) rc = write_ints(m, m->kind, (size_t)ns, kind, err);
+    if (rc == PD_OK) rc = sim_write(m, m->radius_ratio, 0, (size_t)ns, rr, err);
+    goto done;
+oom:
+    rc = pd_error_set(err, PD_ENOMEM, "run: out of memory for the shape tables");
+done:
+    free(mesh);
+    free(voff);
+    free(toff);
+    free(kind);
+    free(uvol);
+    free(rr);
+    free(vert);
+    free(tri);
+    free(vt_off);
+    free(vt);
+    return rc;
+}
+
+/* The contact parameters of every material pair (kernels/contact_pair.h, CP_*). */
+static int upload_params(sim *m, pd_error *err)
+{
+    const pd_scenario *s = m->s;
+    int M = s->nmat;
+    double *par = calloc((size_t)M * M * CP_NPARAM, sizeof(double));
+    if (!par) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
+    for (int a = 0; a < M; a++)
+        for (int b = 0; b < M; b++) {
+            const sc_interaction *in = sc_interaction_of(s, a, b);
+            double *p = par + CP_NPARAM * (a * M + b);
+            const sc_material *ma = &s->mat[a], *mb = &s->mat[b];
+            p[CP_ESTAR] = cf_effective_modulus(ma->youngs_modulus, ma->poisson_ratio,
+                                               mb->youngs_modulus, mb->poisson_ratio);
+            p[CP_GSTAR] = cf_effective_shear(ma->shear_modulus, ma->poisson_ratio,
+                                             mb->shear_modulus, mb->poisson_ratio);
+            if (!in) continue; /* a pair no particles use (the parser checks used pairs) */
+            p[CP_MODEL] = in->model == SC_MODEL_LINEAR;
+            p[CP_MU] = in->friction;
+            p[CP_GAMMA] = in->damping;
+            p[CP_KC] = in->cohesion;
+            p[CP_LE] = in->cohesion_range;
+            p[CP_KE] = in->normal_stiffness;
+            p[CP_KF] = in->tangential_stiffness;
+            p[CP_ETA] = in->damping_coefficient;
+            if (in->cohesion > 0 && 0.5 * in->cohesion_range > m->margin)
+                m->margin = 0.5 * in->cohesion_range;
+        }
+    cl_int e = CL_SUCCESS;
+    int ok = 1;
+    m->params = mk(m, m->rs * (size_t)M * M * CP_NPARAM, &ok, &e);
+    int rc = ok ? sim_write(m, m->params, 0, (size_t)M * M * CP_NPARAM, par, err)
+                : CL_FAIL(err, "clCreateBuffer(params)", e);
+    free(par);
+    return rc;
+}
+
+/* Bodies: particle state from the scenario, walls placed by sim_walls_at(0). */
+static int upload_bodies(sim *m, pd_error *err)
+{
+    const sc_particles *p = m->p;
+    int n = m->n, B = m->nbody;
+    double *L = malloc(sizeof(double) * 3 * n), *inv_i = malloc(sizeof(double) * 3 * n);
+    double *inv_m = calloc((size_t)B, sizeof(double)), *size = calloc((size_t)B, sizeof(double));
+    int *shape = calloc((size_t)B, sizeof(int)), *mat = calloc((size_t)B, sizeof(int));
+    int rc = PD_OK;
+    if (!L || !inv_i || !inv_m || !size || !shape || !mat) {
+        rc = pd_error_set(err, PD_ENOMEM, "run: out of memory for %d particles", n);
+        goto done;
+    }
+    for (int i = 0; i < n; i++) {
+        double r[3][3], wb[3];
+        pd_quat_to_matrix(p->q + 4 * i, r);
+        /* L = R I R^T omega with I the principal (body) inertia */
+        for (int k = 0; k < 3; k++)
+            wb[k] = r[0][k] * p->w[3 * i] + r[1][k] * p->w[3 * i + 1] + r[2][k] * p->w[3 * i + 2];
+        for (int k = 0; k < 3; k++) {
+            L[3 * i + k] = r[k][0] * p->inertia[3 * i] * wb[0] +
+                           r[k][1] * p->inertia[3 * i + 1] * wb[1] +
+                           r[k][2] * p->inertia[3 * i + 2] * wb[2];
+            inv_i[3 * i + k] = 1 / p->inertia[3 * i + k];
+        }
+        inv_m[i] = 1 / p->mass[i];
+        size[i] = p->size[i];
+        shape[i] = p->shape[i];
+        mat[i] = p->material[i];
+    }
+    for (int wi = 0; wi < m->nwall; wi++) {
+        size[n + wi] = 1;
+        shape[n + wi] = m->s->nshape + wi;
+        mat[n + wi] = m->s->wall[wi].material;
+    }
+    rc = sim_write(m, m->x, 0, 3 * (size_t)n, p->x, err);
+    if (rc == PD_OK) rc = sim_write(m, m->q, 0, 4 * (size_t)n, p->q, err);
+    if (rc == PD_OK) rc = sim_write(m, m->v, 0, 3 * (size_t)n, p->v, err);
+    if (rc == PD_OK) rc = sim_write(m, m->w, 0, 3 * (size_t)n, p->w, err);
+    if (rc == PD_OK) rc = sim_write(m, m->L, 0, 3 * (size_t)n, L, err);
+    if (rc == PD_OK) rc = sim_write(m, m->inv_i, 0, 3 * (size_t)n, inv_i, err);
+    if (rc == PD_OK) rc = sim_write(m, m->inv_m, 0, (size_t)B, inv_m, err);
+    if (rc == PD_OK) rc = sim_write(m, m->size, 0, (size_t)B, size, err);
+    if (rc == PD_OK) rc = write_ints(m, m->shape, (size_t)B, shape, err);
+    if (rc == PD_OK) rc = write_ints(m, m->material, (size_t)B, mat, err);
+    if (rc == PD_OK) rc = sim_walls_at(m, 0, err);
+done:
+    free(L);
+    free(inv_i);
+    free(inv_m);
+    free(size);
+    free(shape);
+    free(mat);
+    return rc;
+}
+
+/* The Morton codes' scene box: the particles' and walls' extent at t = 0, padded by half its
+ * size; particles that leave it still work (their codes clamp), the tree is only less tight. */
+static void scene_box(sim *m)
+{
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (int i = 0; i < m->n; i++)
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], m->p->x[3 * i + k]);
+            hi[k] = fmax(hi[k], m->p->x[3 * i + k]);
+        }
+    for (int k = 0; k < 3; k++) {
+        double ext = hi[k] - lo[k], pad = 0.5 * ext + 1e-3;
+        m->lo[k] = lo[k] - pad;
+        m->inv_ext[k] = 1 / (ext + 2 * pad);
+    }
+}
+
+static const char *const kernel_names[][2] = {
+    {"broad_phase", "particle_boxes"},
+    {"bvh", "bvh_codes"},
+    {"broad_phase", "bvh_leaves"},
+    {"bvh", "bvh_nodes"},
+    {"bvh", "bvh_refit"},
+    {"broad_phase", "broad_count"},
+    {"broad_phase", "broad_write"},
+    {"contact", "contact_forces"},
+    {"forces", "body_forces"},
+    {"integrate", "integrate_kick"},
+    {"integrate", "integrate_drift"},
+};
+
+static cl_kernel *kernel_slot(sim *m, int i)
+{
+    cl_kernel *slots[] = {&m->k_boxes, &m->k_codes, &m->k_leaves, &m->k_nodes,
+                          &m->k_refit, &m->k_count, &m->k_write,  &m->k_contact,
+                          &m->k_body,  &m->k_kick,  &m->k_drift};
+    return slots[i];
+}
+
+#define NKERNELS ((int)(sizeof kernel_names / sizeof kernel_names[0]))
+
+int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
+{
+    *out = NULL;
+    if (s->double_precision && !dev->fp64)
+        return pd_error_set(err, PD_EINVAL,
+                            "/precision: device '%s' has no cl_khr_fp64 (double precision); use "
+                            "\"precision\": \"single\" or another device",
+                            dev->name);
+    sim *m = calloc(1, sizeof *m);
+    if (!m) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
+    m->dev = dev;
+    m->s = s;
+    m->dbl = s->double_precision;
+    m->rs = m->dbl ? sizeof(double) : sizeof(float);
+    m->dt = s->dt;
+    m->nwall = s->nwall;
+    m->nmat = s->nmat;
+    int rc = sc_particles_create(s, &m->p, err);
+    if (rc != PD_OK) goto fail;
+    if (m->p->n > 0x7fffffff / 2) {
+        rc = pd_error_set(err, PD_EINVAL, "/particles: %ld particles are more than a run holds",
+                          m->p->n);
+        goto fail;
+    }
+    m->n = (int)m->p->n;
+    if (m->n < 1) {
+        rc = pd_error_set(err, PD_EINVAL, "/particles: the scenario has no particles");
+        goto fail;
+    }
+    m->nbody = m->n + m->nwall;
+    for (int i = 0; i < s->nwall; i++) {
+        const double *v = s->wall[i].velocity, *w = s->wall[i].angular_velocity;
+        if (v[0] || v[1] || v[2] || w[0] || w[1] || w[2]) m->walls_move = 1;
+    }
+    for (int i = 0; i < NKERNELS; i++) {
+        cl_program prog;
+        rc = cl_program_get(dev, kernel_names[i][0], m->dbl, &prog, err);
+        if (rc != PD_OK) goto fail;
+        cl_int e;
+        *kernel_slot(m, i) = clCreateKernel(prog, kernel_names[i][1], &e);
+        if (e != CL_SUCCESS) {
+            rc = CL_FAIL(err, kernel_names[i][1], e);
+            goto fail;
+        }
+    }
+    rc = dsort_init(&m->sort, dev, m->dbl, err);
+    if (rc != PD_OK) goto fail;
+    size_t n = (size_t)m->n, B = (size_t)m->nbody, rs = m->rs, W = (size_t)m->nwall;
+    cl_int e = CL_SUCCESS;
+    int ok = 1;
+    m->x = mk(m, rs * 3 * B, &ok, &e);
+    m->q = mk(m, rs * 4 * B, &ok, &e);
+    m->v = mk(m, rs * 3 * B, &ok, &e);
+    m->w = mk(m, rs * 3 * B, &ok, &e);
+    m->size = mk(m, rs * B, &ok, &e);
+    m->inv_m = mk(m, rs * B, &ok, &e);
+    m->shape = mk(m, sizeof(int) * B, &ok, &e);
+    m->material = mk(m, sizeof(int) * B, &ok, &e);
+    m->L = mk(m, rs * 3 * n, &ok, &e);
+    m->inv_i = mk(m, rs * 3 * n, &ok, &e);
+    m->f = mk(m, rs * 3 * n, &ok, &e);
+    m->t = mk(m, rs * 3 * n, &ok, &e);
+    m->pbox = mk(m, rs * 6 * n, &ok, &e);
+    m->wbox = mk(m, rs * 6 * W, &ok, &e);
+    m->tbox = mk(m, rs * 6 * (2 * n - 1), &ok, &e);
+    m->left = mk(m, sizeof(int) * n, &ok, &e);
+    m->right = mk(m, sizeof(int) * n, &ok, &e);
+    m->parent = mk(m, sizeof(int) * 2 * n, &ok, &e);
+    m->arrivals = mk(m, sizeof(int) * n, &ok, &e);
+    m->codes = mk(m, sizeof(cl_ulong) * n, &ok, &e);
+    m->codes_tmp = mk(m, sizeof(cl_ulong) * n, &ok, &e);
+    m->idx = mk(m, sizeof(int) * n, &ok, &e);
+    m->idx_tmp = mk(m, sizeof(int) * n, &ok, &e);
+    m->count = mk(m, sizeof(int) * n, &ok, &e);
+    m->offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
+    m->status = mk(m, sizeof(int) * 2, &ok, &e);
+    if (!ok) {
+        rc = CL_FAIL(err, "clCreateBuffer(particles)", e);
+        goto fail;
+    }
+    /* the contact stage's scratch: one overlap per work-item at a time */
+    m->nwork = dev->gpu ? 256 * dev->compute_units : 16 * dev->compute_units;
+    if ((rc = upload_params(m, err)) != PD_OK || (rc = upload_shapes(m, err)) != PD_OK) goto fail;
+    m->iscr = mk(m, sizeof(int) * (size_t)m->nwork * (size_t)m->ilen, &ok, &e);
+    m->rscr = mk(m, rs * (size_t)m->nwork * (size_t)m->rlen, &ok, &e);
+    if (!ok) {
+        rc = CL_FAIL(err, "clCreateBuffer(overlap scratch)", e);
+        goto fail;
+    }
+    if ((rc = upload_bodies(m, err)) != PD_OK) goto fail;
+    cl_int status0[2] = {0, 0x7fffffff}; /* INT_MAX: no particle found diverging */
+    e = clEnqueueWriteBuffer(dev->queue, m->status, CL_TRUE, 0, sizeof status0, status0, 0, NULL,
+                             NULL);
+    if (e != CL_SUCCESS) {
+        rc = CL_FAIL(err, "clEnqueueWriteBuffer(status)", e);
+        goto fail;
+    }
+    scene_box(m);
+    *out = m;
+    return PD_OK;
+fail:
+    sim_destroy(m);
+    return rc;
+}
+
+static void release(cl_mem *b)
+{
+    if (*b) clReleaseMemObject(*b);
+    *b = NULL;
+}
+
+void sim_destroy(sim *m)
+{
+    if (!m) return;
+    cl_mem *bufs[] = {&m->x,         &m->q,           &m->v,
+                      &m->w,         &m->size,        &m->inv_m,
+                      &m->shape,     &m->material,    &m->L,
+                      &m->inv_i,     &m->f,           &m->t,
+                      &m->vert,      &m->tri,         &m->voff,
+                      &m->toff,      &m->vt_off,      &m->vt,
+                      &m->unit_vol,  &m->kind,        &m->radius_ratio,
+                      &m->params,    &m->pbox,        &m->wbox,
+                      &m->tbox,      &m->left,        &m->right,
+                      &m->parent,    &m->arrivals,    &m->codes,
+                      &m->idx,       &m->codes_tmp,   &m->idx_tmp,
+                      &m->count,     &m->offset,      &m->status,
+                      &m->cur.keys,  &m->cur.spring,  &m->cur.kt,
+                      &m->old.keys,  &m->old.spring,  &m->old.kt,
+                      &m->force,     &m->tq1,         &m->tq2,
+                      &m->info,      &m->ids,         &m->swapped,
+                      &m->by_second, &m->swapped_tmp, &m->by_second_tmp,
+                      &m->iscr,      &m->rscr};
+    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++)
+        release(bufs[i]);
+    for (int i = 0; i < NKERNELS; i++)
+        if (*kernel_slot(m, i)) clReleaseKernel(*kernel_slot(m, i));
+    if (m->sort.dev) dsort_free(&m->sort);
+    sc_particles_destroy(m->p);
+    free(m->wall_c0);
+    free(m->wall_local);
+    free(m->wall_voff);
+    free(m);
+}

@@ -1,0 +1,303 @@
+/*
+ * sim_step.c - the stages of one time step on the device (see sim.h): integration, broad phase,
+ * narrow phase and forces, gather. Deterministic: no floating-point atomics anywhere, every
+ * order fixed by keys, so a run repeats bit for bit on one device.
+ */
+#include <limits.h>
+#include <string.h>
+
+#include "sim.h"
+
+#define ARG(k, i, v) (clSetKernelArg(k, i, sizeof(v), &(v)))
+
+/* Sets a pd_real argument in the device's precision. */
+static cl_int arg_real(sim *m, cl_kernel k, int i, double v)
+{
+    float f = (float)v;
+    return m->dbl ? clSetKernelArg(k, (cl_uint)i, sizeof v, &v)
+                  : clSetKernelArg(k, (cl_uint)i, sizeof f, &f);
+}
+
+static int arg_fail(pd_error *err, const char *kernel)
+{
+    return pd_error_set(err, PD_ECL, "opencl: setting the arguments of %s failed", kernel);
+}
+
+/* Grows the pair arrays to hold npairs (the last step's history stays where it is). */
+static int ensure_pairs(sim *m, int npairs, pd_error *err)
+{
+    size_t need = (size_t)npairs;
+    cl_int e = CL_SUCCESS;
+    cl_context ctx = m->dev->ctx;
+    if (need > m->cur.cap || !m->cur.keys) {
+        size_t cap = need + need / 2 + 1024;
+        if (m->cur.keys) clReleaseMemObject(m->cur.keys);
+        if (m->cur.spring) clReleaseMemObject(m->cur.spring);
+        if (m->cur.kt) clReleaseMemObject(m->cur.kt);
+        m->cur.keys = m->cur.spring = m->cur.kt = NULL;
+        m->cur.cap = 0;
+        m->cur.keys = clCreateBuffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_ulong) * cap, NULL, &e);
+        if (e == CL_SUCCESS)
+            m->cur.spring = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * 3 * cap, NULL, &e);
+        if (e == CL_SUCCESS)
+            m->cur.kt = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * cap, NULL, &e);
+        if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateBuffer(contact pairs)", e);
+        m->cur.cap = cap;
+    }
+    if (need > m->work_cap || !m->force) {
+        size_t cap = need + need / 2 + 1024;
+        cl_mem *b[] = {&m->force,   &m->tq1,       &m->tq2,         &m->info,         &m->ids,
+                       &m->swapped, &m->by_second, &m->swapped_tmp, &m->by_second_tmp};
+        size_t sz[] = {m->rs * 3,        m->rs * 3,   m->rs * 3,        m->rs * 2,  sizeof(int),
+                       sizeof(cl_ulong), sizeof(int), sizeof(cl_ulong), sizeof(int)};
+        m->work_cap = 0;
+        for (size_t i = 0; i < sizeof b / sizeof b[0]; i++) {
+            if (*b[i]) clReleaseMemObject(*b[i]);
+            *b[i] = NULL;
+        }
+        for (size_t i = 0; i < sizeof b / sizeof b[0] && e == CL_SUCCESS; i++)
+            *b[i] = clCreateBuffer(ctx, CL_MEM_READ_WRITE, sz[i] * cap, NULL, &e);
+        if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateBuffer(contact work)", e);
+        m->work_cap = cap;
+    }
+    return PD_OK;
+}
+
+static int bits_for(unsigned long v)
+{
+    int b = 0;
+    while (v >> b)
+        b++;
+    return b;
+}
+
+/* Broad phase: boxes, tree, traversal; leaves the step's sorted pair keys in m->cur.keys. */
+static int broad_phase(sim *m, pd_error *err)
+{
+    pd_device *dev = m->dev;
+    int n = m->n, nw = m->nwall, rc;
+    cl_int e = CL_SUCCESS;
+    e |= ARG(m->k_boxes, 0, m->x);
+    e |= ARG(m->k_boxes, 1, m->size);
+    e |= ARG(m->k_boxes, 2, m->shape);
+    e |= ARG(m->k_boxes, 3, m->radius_ratio);
+    e |= ARG(m->k_boxes, 4, n);
+    e |= arg_real(m, m->k_boxes, 5, m->margin);
+    e |= ARG(m->k_boxes, 6, m->pbox);
+    if (e != CL_SUCCESS) return arg_fail(err, "particle_boxes");
+    if ((rc = cl_launch(dev, m->k_boxes, (size_t)n, "particle_boxes", err)) != PD_OK) return rc;
+
+    e |= ARG(m->k_codes, 0, m->pbox);
+    e |= ARG(m->k_codes, 1, n);
+    for (int k = 0; k < 3; k++) {
+        e |= arg_real(m, m->k_codes, 2 + k, m->lo[k]);
+        e |= arg_real(m, m->k_codes, 5 + k, m->inv_ext[k]);
+    }
+    e |= ARG(m->k_codes, 8, m->codes);
+    e |= ARG(m->k_codes, 9, m->idx);
+    if (e != CL_SUCCESS) return arg_fail(err, "bvh_codes");
+    if ((rc = cl_launch(dev, m->k_codes, (size_t)n, "bvh_codes", err)) != PD_OK) return rc;
+    static const int morton_shifts[8] = {0, 8, 16, 24, 32, 40, 48, 56};
+    rc = dsort_radix(&m->sort, &m->codes, &m->idx, &m->codes_tmp, &m->idx_tmp, n, morton_shifts, 8,
+                     err);
+    if (rc != PD_OK) return rc;
+
+    e |= ARG(m->k_leaves, 0, m->pbox);
+    e |= ARG(m->k_leaves, 1, m->idx);
+    e |= ARG(m->k_leaves, 2, n);
+    e |= ARG(m->k_leaves, 3, m->tbox);
+    e |= ARG(m->k_nodes, 0, m->codes);
+    e |= ARG(m->k_nodes, 1, n);
+    e |= ARG(m->k_nodes, 2, m->left);
+    e |= ARG(m->k_nodes, 3, m->right);
+    e |= ARG(m->k_nodes, 4, m->parent);
+    e |= ARG(m->k_refit, 0, m->tbox);
+    e |= ARG(m->k_refit, 1, m->left);
+    e |= ARG(m->k_refit, 2, m->right);
+    e |= ARG(m->k_refit, 3, m->parent);
+    e |= ARG(m->k_refit, 4, n);
+    e |= ARG(m->k_refit, 5, m->arrivals);
+    if (e != CL_SUCCESS) return arg_fail(err, "bvh_leaves/bvh_nodes/bvh_refit");
+    if ((rc = cl_launch(dev, m->k_leaves, (size_t)n, "bvh_leaves", err)) != PD_OK) return rc;
+    if (n > 1) {
+        if ((rc = cl_launch(dev, m->k_nodes, (size_t)n - 1, "bvh_nodes", err)) != PD_OK) return rc;
+        int zero = 0;
+        e = clEnqueueFillBuffer(dev->queue, m->arrivals, &zero, sizeof zero, 0,
+                                sizeof(int) * (size_t)(n - 1), 0, NULL, NULL);
+        if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueFillBuffer", e);
+        if ((rc = cl_launch(dev, m->k_refit, (size_t)n, "bvh_refit", err)) != PD_OK) return rc;
+    }
+
+    e |= ARG(m->k_count, 0, m->tbox);
+    e |= ARG(m->k_count, 1, m->left);
+    e |= ARG(m->k_count, 2, m->right);
+    e |= ARG(m->k_count, 3, m->idx);
+    e |= ARG(m->k_count, 4, n);
+    e |= ARG(m->k_count, 5, m->pbox);
+    e |= ARG(m->k_count, 6, m->wbox);
+    e |= ARG(m->k_count, 7, nw);
+    e |= ARG(m->k_count, 8, m->count);
+    if (e != CL_SUCCESS) return arg_fail(err, "broad_count");
+    if ((rc = cl_launch(dev, m->k_count, (size_t)n, "broad_count", err)) != PD_OK) return rc;
+    if ((rc = dsort_scan(&m->sort, m->count, n, m->offset, err)) != PD_OK) return rc;
+    /* the one value the host needs every step; the divergence flag comes with it */
+    cl_int total = 0;
+    e = clEnqueueReadBuffer(dev->queue, m->status, CL_FALSE, 0, sizeof m->status_host,
+                            m->status_host, 0, NULL, NULL);
+    if (e == CL_SUCCESS)
+        e = clEnqueueReadBuffer(dev->queue, m->offset, CL_TRUE, sizeof(int) * (size_t)n,
+                                sizeof total, &total, 0, NULL, NULL);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(pair count)", e);
+    if (total < 0) return pd_error_set(err, PD_ENOMEM, "run: more than 2^31 candidate pairs");
+    if ((rc = ensure_pairs(m, total, err)) != PD_OK) return rc;
+    m->npairs = total;
+
+    e |= ARG(m->k_write, 0, m->tbox);
+    e |= ARG(m->k_write, 1, m->left);
+    e |= ARG(m->k_write, 2, m->right);
+    e |= ARG(m->k_write, 3, m->idx);
+    e |= ARG(m->k_write, 4, n);
+    e |= ARG(m->k_write, 5, m->pbox);
+    e |= ARG(m->k_write, 6, m->wbox);
+    e |= ARG(m->k_write, 7, nw);
+    e |= ARG(m->k_write, 8, m->offset);
+    e |= ARG(m->k_write, 9, m->ids);
+    e |= ARG(m->k_write, 10, m->cur.keys);
+    if (e != CL_SUCCESS) return arg_fail(err, "broad_write");
+    return cl_launch(dev, m->k_write, (size_t)n, "broad_write", err);
+}
+
+/* Narrow phase and contact forces with history over the step's pairs. */
+static int contacts(sim *m, pd_error *err)
+{
+    cl_kernel k = m->k_contact;
+    int a = 0, nwork = m->npairs < m->nwork ? m->npairs : m->nwork;
+    cl_int e = CL_SUCCESS;
+    e |= ARG(k, a++, m->cur.keys);
+    e |= ARG(k, a++, m->npairs);
+    cl_mem ok = m->old.keys ? m->old.keys : m->cur.keys; /* first step: no history */
+    cl_mem os = m->old.spring ? m->old.spring : m->cur.spring;
+    cl_mem okt = m->old.kt ? m->old.kt : m->cur.kt;
+    e |= ARG(k, a++, ok);
+    e |= ARG(k, a++, m->n_old);
+    e |= ARG(k, a++, os);
+    e |= ARG(k, a++, okt);
+    cl_mem body[] = {m->x,      m->q,        m->v,        m->w,    m->size,  m->inv_m,
+                     m->shape,  m->material, m->vert,     m->tri,  m->voff,  m->toff,
+                     m->vt_off, m->vt,       m->unit_vol, m->kind, m->params};
+    for (size_t i = 0; i < sizeof body / sizeof body[0]; i++)
+        e |= ARG(k, a++, body[i]);
+    e |= ARG(k, a++, m->nmat);
+    e |= ARG(k, a++, m->n);
+    e |= arg_real(m, k, a++, m->dt);
+    e |= ARG(k, a++, m->iscr);
+    e |= ARG(k, a++, m->rscr);
+    e |= ARG(k, a++, m->ilen);
+    e |= ARG(k, a++, m->rlen);
+    e |= ARG(k, a++, m->pts_cap);
+    e |= ARG(k, a++, nwork);
+    cl_mem outs[] = {m->force, m->tq1, m->tq2, m->cur.spring, m->cur.kt, m->info};
+    for (size_t i = 0; i < sizeof outs / sizeof outs[0]; i++)
+        e |= ARG(k, a++, outs[i]);
+    if (e != CL_SUCCESS) return arg_fail(err, "contact_forces");
+    return cl_launch(m->dev, k, (size_t)nwork, "contact_forces", err);
+}
+
+/* Per-particle sums: contacts sorted by second body, then the gather kernel. */
+static int gather(sim *m, pd_error *err)
+{
+    int rc, np = m->npairs;
+    if (np > 0) {
+        rc = dsort_swap_keys(&m->sort, m->cur.keys, np, m->swapped, m->by_second, err);
+        if (rc != PD_OK) return rc;
+        /* swapped keys: (second, first); first < n in the low word, second < n or a wall */
+        int shifts[8], ns = 0, lowbits = bits_for((unsigned long)m->n);
+        for (int s = 0; s < lowbits && ns < 4; s += 8)
+            shifts[ns++] = s;
+        for (int s = 0; s < lowbits && s < 24; s += 8)
+            shifts[ns++] = 32 + s;
+        if (m->nwall > 0 && lowbits <= 24) shifts[ns++] = 56;
+        rc = dsort_radix(&m->sort, &m->swapped, &m->by_second, &m->swapped_tmp, &m->by_second_tmp,
+                         np, shifts, ns, err);
+        if (rc != PD_OK) return rc;
+    }
+    const pd_scenario *s = m->s;
+    cl_kernel k = m->k_body;
+    cl_int e = CL_SUCCESS;
+    int a = 0;
+    e |= ARG(k, a++, m->cur.keys);
+    e |= ARG(k, a++, m->by_second);
+    e |= ARG(k, a++, m->swapped);
+    e |= ARG(k, a++, np);
+    e |= ARG(k, a++, m->force);
+    e |= ARG(k, a++, m->tq1);
+    e |= ARG(k, a++, m->tq2);
+    e |= ARG(k, a++, m->n);
+    e |= ARG(k, a++, m->inv_m);
+    e |= ARG(k, a++, m->size);
+    e |= ARG(k, a++, m->v);
+    for (int c = 0; c < 3; c++)
+        e |= arg_real(m, k, a++, s->gravity[c]);
+    e |= arg_real(m, k, a++, s->has_fluid ? s->fluid_viscosity : 0);
+    for (int c = 0; c < 3; c++)
+        e |= arg_real(m, k, a++, s->has_fluid ? s->fluid_velocity[c] : 0);
+    e |= ARG(k, a++, m->f);
+    e |= ARG(k, a++, m->t);
+    if (e != CL_SUCCESS) return arg_fail(err, "body_forces");
+    return cl_launch(m->dev, k, (size_t)m->n, "body_forces", err);
+}
+
+int sim_forces(sim *m, pd_error *err)
+{
+    int rc = broad_phase(m, err);
+    if (rc == PD_OK && m->npairs > 0) rc = contacts(m, err);
+    if (rc == PD_OK) rc = gather(m, err);
+    if (rc != PD_OK) return rc;
+    /* this step's pairs become the next step's history */
+    sim_pairs t = m->old;
+    m->old = m->cur;
+    m->cur = t;
+    m->n_old = m->npairs;
+    return PD_OK;
+}
+
+static int kick(sim *m, pd_error *err)
+{
+    cl_kernel k = m->k_kick;
+    cl_int e = CL_SUCCESS;
+    e |= ARG(k, 0, m->v);
+    e |= ARG(k, 1, m->L);
+    e |= ARG(k, 2, m->f);
+    e |= ARG(k, 3, m->t);
+    e |= ARG(k, 4, m->inv_m);
+    e |= ARG(k, 5, m->n);
+    e |= arg_real(m, k, 6, 0.5 * m->dt);
+    if (e != CL_SUCCESS) return arg_fail(err, "integrate_kick");
+    return cl_launch(m->dev, k, (size_t)m->n, "integrate_kick", err);
+}
+
+int sim_step(sim *m, int *bad_particle, pd_error *err)
+{
+    cl_kernel k = m->k_drift;
+    cl_int e = CL_SUCCESS;
+    int rc = kick(m, err);
+    if (rc != PD_OK) return rc;
+    e |= ARG(k, 0, m->x);
+    e |= ARG(k, 1, m->v);
+    e |= ARG(k, 2, m->q);
+    e |= ARG(k, 3, m->L);
+    e |= ARG(k, 4, m->inv_i);
+    e |= ARG(k, 5, m->w);
+    e |= ARG(k, 6, m->n);
+    e |= arg_real(m, k, 7, m->dt);
+    e |= ARG(k, 8, m->status);
+    if (e != CL_SUCCESS) return arg_fail(err, "integrate_drift");
+    if ((rc = cl_launch(m->dev, k, (size_t)m->n, "integrate_drift", err)) != PD_OK) return rc;
+    if (m->walls_move && (rc = sim_walls_at(m, (double)(m->step + 1) * m->dt, err)) != PD_OK)
+        return rc;
+    if ((rc = sim_forces(m, err)) != PD_OK) return rc;
+    if ((rc = kick(m, err)) != PD_OK) return rc;
+    m->step++;
+    *bad_particle = m->status_host[1] != INT_MAX ? m->status_host[1] : -1;
+    return PD_OK;
+}

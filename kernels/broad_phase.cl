@@ -1,0 +1,100 @@
+/*
+ * broad_phase.cl - boxes, leaf placement and traversal of the broad phase (kernels/bvh.h), one
+ * work-item per particle. Built with -DPD_DOUBLE=0 or 1.
+ *
+ * Candidate pairs are found twice (from either particle), so each particle keeps only partners
+ * with a larger index; walls (few, tested box against box) follow its particle partners. A pass
+ * counts each particle's pairs, the host scans the counts into offsets, and a second pass writes
+ * the keys, sorted within each particle's segment: the step's keys come out globally sorted
+ * (first body, then second) without a global sort.
+ */
+#include "pd_real.h"
+#include "bvh.h"
+#include "contact_history.h"
+
+/* Box of each particle: its centre plus or minus the circumradius and a margin (m). */
+__kernel void particle_boxes(__global const pd_real *x, __global const pd_real *size,
+                             __global const int *shape, __global const pd_real *radius_ratio, int n,
+                             pd_real margin, __global pd_real *box)
+{
+    int i = (int)get_global_id(0);
+    if (i >= n) return;
+    pd_real r = radius_ratio[shape[i]] * size[i] + margin;
+    pd_v3 c = v3_load(x, i);
+    __global pd_real *b = box + 6 * i;
+    b[0] = c.x - r;
+    b[1] = c.y - r;
+    b[2] = c.z - r;
+    b[3] = c.x + r;
+    b[4] = c.y + r;
+    b[5] = c.z + r;
+}
+
+/* Leaf k of the tree is the box of particle idx[k] (sorted by Morton code). */
+__kernel void bvh_leaves(__global const pd_real *pbox, __global const int *idx, int n,
+                         __global pd_real *box)
+{
+    int k = (int)get_global_id(0);
+    if (k >= n) return;
+    for (int c = 0; c < 6; c++)
+        box[6 * (n - 1 + k) + c] = pbox[6 * idx[k] + c];
+}
+
+PD_FN int walls_meeting(__global const pd_real *wbox, int nwall, const pd_real *q,
+                        __global ch_key *out, unsigned self)
+{
+    int m = 0;
+    for (int w = 0; w < nwall; w++)
+        if (bvh_boxes_meet(wbox + 6 * w, q)) {
+            if (out) out[m] = ch_make(self, CH_WALL + (unsigned)w);
+            m++;
+        }
+    return m;
+}
+
+/* Number of candidate pairs of particle i (partners above i, then walls). */
+__kernel void broad_count(__global const pd_real *box, __global const int *left,
+                          __global const int *right, __global const int *idx, int n,
+                          __global const pd_real *pbox, __global const pd_real *wbox, int nwall,
+                          __global int *count)
+{
+    int i = (int)get_global_id(0);
+    if (i >= n) return;
+    pd_real q[6];
+    for (int c = 0; c < 6; c++)
+        q[c] = pbox[6 * i + c];
+    int m = bvh_query_after(box, left, right, n, q, idx, i, 0, 0);
+    count[i] = m + walls_meeting(wbox, nwall, q, 0, (unsigned)i);
+}
+
+/*
+ * Writes particle i's pair keys at offset[i]: partners in ascending order (an insertion sort of
+ * the segment: a particle has tens of candidates), then walls. The partner ids are first stored
+ * in the low words of the segment's keys as scratch.
+ */
+__kernel void broad_write(__global const pd_real *box, __global const int *left,
+                          __global const int *right, __global const int *idx, int n,
+                          __global const pd_real *pbox, __global const pd_real *wbox, int nwall,
+                          __global const int *offset, __global int *scratch, __global ch_key *keys)
+{
+    int i = (int)get_global_id(0);
+    if (i >= n) return;
+    pd_real q[6];
+    for (int c = 0; c < 6; c++)
+        q[c] = pbox[6 * i + c];
+    int off = offset[i], cap = offset[i + 1] - off;
+    __global int *ids = scratch + off;
+    int m = bvh_query_after(box, left, right, n, q, idx, i, ids, cap);
+    if (m > cap) m = cap; /* cannot happen: the same query counted them */
+    for (int a = 1; a < m; a++) {
+        int v = ids[a], b = a - 1;
+        while (b >= 0 && ids[b] > v) {
+            ids[b + 1] = ids[b];
+            b--;
+        }
+        ids[b + 1] = v;
+    }
+    for (int a = 0; a < m; a++)
+        keys[off + a] = ch_make((unsigned)i, (unsigned)ids[a]);
+    walls_meeting(wbox, nwall, q, keys + off + m, (unsigned)i);
+}

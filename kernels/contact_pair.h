@@ -1,0 +1,277 @@
+/*
+ * contact_pair.h - one candidate pair of the simulation, from geometry to forces: the narrow phase
+ * (thesis sections 4.2, 5.2-5.3, or the analytic sphere), the tangential history (eqs. 4.8-4.9)
+ * and the force laws of contact_force.h. Shared by the contact kernel (kernels/contact.cl) and
+ * host C, so tests run the code the device runs.
+ *
+ * Bodies are particles and walls alike: a body has a pose, a size (volume-equivalent diameter;
+ * walls have size 1 and their mesh in metres about its centroid), a shape and a material. A pair
+ * (a, b) always has a < b, walls last, so b may be a wall and a never is.
+ *
+ * Geometry by shape kinds:
+ *   mesh-mesh     exact overlap volume V, centroid, normal (eq. 4.19) and depth (overlap.h);
+ *   sphere-sphere the classic overlap of two spheres;
+ *   sphere-mesh   the sphere against the mesh taken as locally flat: the closest point of the
+ *                 mesh surface, inside or outside by the winding number, overlap delta = r - d
+ *                 (outside) or r + d (inside).
+ * Forces by model (per material pair, cp_params):
+ *   hertz_mindlin volumetric Hertz (eqs. 4.16-4.18) for mesh-mesh, sphere Hertz (eqs. 4.1-4.10)
+ *                 otherwise with R* = r_a r_b / (r_a + r_b), or r for a sphere on a mesh;
+ *   linear        seed 004 eq. 2.1 with the friction of eqs. 2.2-2.4 (k_f spring, Coulomb cap).
+ * Cohesion (seed 004 eq. 2.5) acts on pairs with a sphere: F_c = k_c delta_e, attractive, where
+ * delta_e = L_e + delta is the overlap of the effect surfaces, L_e (cohesion_range) beyond the
+ * bodies. Mesh-mesh pairs have no separation distance and get no cohesion.
+ */
+#ifndef PD_CONTACT_PAIR_H
+#define PD_CONTACT_PAIR_H
+
+#include "contact_force.h"
+#include "contact_history.h"
+#include "narrow_phase.h"
+
+/* Per material pair parameters, CP_NPARAM reals at params[CP_NPARAM (ma * nmat + mb)]. */
+enum {
+    CP_MODEL = 0, /* 0 hertz_mindlin, 1 linear */
+    CP_ESTAR,     /* eq. 4.2, Pa */
+    CP_GSTAR,     /* Mindlin's effective shear modulus, Pa */
+    CP_MU,        /* friction coefficient */
+    CP_GAMMA,     /* damping of eqs. 4.5/4.16 */
+    CP_KC,        /* cohesion stiffness, N/m */
+    CP_LE,        /* cohesion range L_e, m */
+    CP_KE,        /* linear normal stiffness, N/m */
+    CP_KF,        /* linear tangential (friction) stiffness, N/m */
+    CP_ETA,       /* linear damping coefficient, N s/m */
+    CP_NPARAM
+};
+
+/* Everything the contact stage reads about bodies, shapes and materials. */
+typedef struct cp_world {
+    PD_GLOBAL const pd_real *x, *q, *v, *w, *size, *inv_m;
+    PD_GLOBAL const int *shape, *material;
+    np_shapes sh;
+    PD_GLOBAL const int *kind; /* per shape: 0 mesh, 1 sphere */
+    PD_GLOBAL const pd_real *params;
+    int nmat;
+    int nparticles; /* bodies at and above are walls: body = nparticles + (key - CH_WALL) */
+    pd_real dt;
+} cp_world;
+
+/* What a pair yields: force on b (a gets minus it), torques about each centre, and stats. */
+typedef struct cp_result {
+    pd_v3 force, tq_a, tq_b;
+    pd_v3 spring; /* tangential history carried to the next step */
+    pd_real kt;
+    int touching;  /* bodies overlap (a contact) */
+    pd_real ratio; /* depth / smaller particle size */
+    pd_v3 point;   /* contact point, m */
+} cp_result;
+
+/* The body index of the second half of a key (walls follow the particles). */
+PD_FN int cp_body(const cp_world *wd, unsigned id)
+{
+    return id >= CH_WALL ? wd->nparticles + (int)(id - CH_WALL) : (int)id;
+}
+
+PD_FN void cp_load_body(const cp_world *wd, int i, np_body *b)
+{
+    b->x = v3_load(wd->x, i);
+    for (int k = 0; k < 4; k++)
+        b->q[k] = wd->q[4 * i + k];
+    b->size = wd->size[i];
+    b->shape = wd->shape[i];
+}
+
+/* Closest point to p on triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5). */
+PD_FN pd_v3 cp_closest_on_triangle(pd_v3 p, pd_v3 a, pd_v3 b, pd_v3 c)
+{
+    pd_v3 ab = v3_sub(b, a), ac = v3_sub(c, a), ap = v3_sub(p, a);
+    pd_real d1 = v3_dot(ab, ap), d2 = v3_dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) return a;
+    pd_v3 bp = v3_sub(p, b);
+    pd_real d3 = v3_dot(ab, bp), d4 = v3_dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return b;
+    pd_real vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return v3_add(a, v3_scale(ab, d1 / (d1 - d3)));
+    pd_v3 cp = v3_sub(p, c);
+    pd_real d5 = v3_dot(ab, cp), d6 = v3_dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return c;
+    pd_real vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return v3_add(a, v3_scale(ac, d2 / (d2 - d6)));
+    pd_real va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0)
+        return v3_add(b, v3_scale(v3_sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
+    pd_real den = PD_R(1) / (va + vb + vc);
+    return v3_add(a, v3_add(v3_scale(ab, vb * den), v3_scale(ac, vc * den)));
+}
+
+/* Solid angle of triangle (a, b, c) seen from the origin (Van Oosterom & Strackee 1983). */
+PD_FN pd_real cp_solid_angle(pd_v3 a, pd_v3 b, pd_v3 c)
+{
+    pd_real la = v3_norm(a), lb = v3_norm(b), lc = v3_norm(c);
+    pd_real num = v3_dot(a, v3_cross(b, c));
+    pd_real den = la * lb * lc + v3_dot(a, b) * lc + v3_dot(a, c) * lb + v3_dot(b, c) * la;
+    return PD_R(2) * atan2(num, den);
+}
+
+/*
+ * Sphere (centre s, radius r, world) against mesh body m. Returns the overlap delta (negative:
+ * the gap), the unit normal from the sphere into the mesh and the closest surface point (world).
+ */
+PD_FN pd_real cp_sphere_mesh(const cp_world *wd, pd_v3 s, pd_real r, const np_body *m, pd_v3 *n,
+                             pd_v3 *surf)
+{
+    pd_real R[9];
+    np_quat_matrix(m->q, R);
+    pd_v3 d = v3_sub(s, m->x);
+    /* the sphere's centre in the mesh's body frame at size 1 */
+    pd_real inv = PD_R(1) / m->size;
+    pd_v3 p = v3((R[0] * d.x + R[3] * d.y + R[6] * d.z) * inv,
+                 (R[1] * d.x + R[4] * d.y + R[7] * d.z) * inv,
+                 (R[2] * d.x + R[5] * d.y + R[8] * d.z) * inv);
+    int sh = m->shape;
+    PD_GLOBAL const pd_real *vert = wd->sh.vert + 3 * wd->sh.voff[sh];
+    PD_GLOBAL const int *tri = wd->sh.tri + 3 * wd->sh.toff[sh];
+    int nt = wd->sh.toff[sh + 1] - wd->sh.toff[sh];
+    pd_real best = PD_REAL_MAX, omega = 0;
+    pd_v3 cbest = p, fnormal = v3(0, 0, 1);
+    for (int t = 0; t < nt; t++) {
+        pd_v3 a = v3_load(vert, tri[3 * t]), b = v3_load(vert, tri[3 * t + 1]),
+              c = v3_load(vert, tri[3 * t + 2]);
+        pd_v3 cp = cp_closest_on_triangle(p, a, b, c), dd = v3_sub(cp, p);
+        pd_real d2 = v3_dot(dd, dd);
+        if (d2 < best) {
+            best = d2;
+            cbest = cp;
+            fnormal = v3_cross(v3_sub(b, a), v3_sub(c, a));
+        }
+        omega += cp_solid_angle(v3_sub(a, p), v3_sub(b, p), v3_sub(c, p));
+    }
+    int inside = PD_FABS(omega) > PD_R(6.283185307179586); /* winding number 1 vs 0 */
+    pd_v3 dv = v3_sub(cbest, p);
+    pd_real dist = v3_norm(dv) * m->size;
+    pd_v3 nb; /* body frame, from the sphere into the mesh */
+    if (dist > PD_R(0))
+        nb = v3_unit(inside ? v3_scale(dv, -1) : dv);
+    else
+        nb = v3_unit(v3_scale(fnormal, -1));
+    /* back to world */
+    *n = v3(R[0] * nb.x + R[1] * nb.y + R[2] * nb.z, R[3] * nb.x + R[4] * nb.y + R[5] * nb.z,
+            R[6] * nb.x + R[7] * nb.y + R[8] * nb.z);
+    pd_v3 cw = v3_scale(cbest, m->size);
+    *surf = v3_add(m->x, v3(R[0] * cw.x + R[1] * cw.y + R[2] * cw.z,
+                            R[3] * cw.x + R[4] * cw.y + R[5] * cw.z,
+                            R[6] * cw.x + R[7] * cw.y + R[8] * cw.z));
+    return inside ? r + dist : r - dist;
+}
+
+/*
+ * Evaluates pair `key` with last step's tangential state (spring0, kt0; zero for a new pair).
+ * in/rscr: the overlap scratch of this work-item (ovl_in's iscr, rscr, pts_cap).
+ */
+PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, PD_GLOBAL int *iscr,
+                   PD_GLOBAL pd_real *rscr, int pts_cap, cp_result *res)
+{
+    int ia = (int)ch_first(key), ib = cp_body(wd, ch_second(key));
+    np_body a, b;
+    cp_load_body(wd, ia, &a);
+    cp_load_body(wd, ib, &b);
+    int ka = wd->kind[a.shape], kb = wd->kind[b.shape];
+    PD_GLOBAL const pd_real *pr =
+        wd->params + CP_NPARAM * (wd->material[ia] * wd->nmat + wd->material[ib]);
+    int linear = pr[CP_MODEL] != PD_R(0);
+    int wall_b = ib >= wd->nparticles;
+    pd_real smin = wall_b ? a.size : pd_min(a.size, b.size);
+
+    res->force = res->tq_a = res->tq_b = res->spring = v3(0, 0, 0);
+    res->kt = 0;
+    res->touching = 0;
+    res->ratio = 0;
+    res->point = v3(0, 0, 0);
+
+    /* geometry: normal n from a into b, overlap delta (negative: gap), contact point c */
+    pd_v3 n, c;
+    pd_real delta, vol = 0, rstar = 0;
+    int volumetric = 0, cohesive = 0;
+    if (ka == 1 && kb == 1) {
+        pd_real ra = PD_R(0.5) * a.size, rb = PD_R(0.5) * b.size;
+        pd_v3 d = v3_sub(b.x, a.x);
+        pd_real dist = v3_norm(d);
+        n = dist > PD_R(0) ? v3_scale(d, PD_R(1) / dist) : v3(0, 0, 1);
+        delta = ra + rb - dist;
+        c = v3_add(a.x, v3_scale(n, ra - PD_R(0.5) * delta));
+        rstar = ra * rb / (ra + rb);
+        cohesive = 1;
+    } else if (ka == 1 || kb == 1) {
+        int sa = ka == 1;
+        const np_body *sp = sa ? &a : &b, *me = sa ? &b : &a;
+        pd_real r = PD_R(0.5) * sp->size;
+        pd_v3 ns, surf;
+        delta = cp_sphere_mesh(wd, sp->x, r, me, &ns, &surf);
+        n = sa ? ns : v3_scale(ns, -1);
+        c = v3_add(sp->x, v3_scale(ns, r - PD_R(0.5) * delta));
+        rstar = r;
+        cohesive = 1;
+    } else {
+        ovl_in in;
+        pd_real ra[9];
+        np_setup(&wd->sh, &a, &b, 0, &in, ra);
+        in.iscr = iscr;
+        in.rscr = rscr;
+        in.pts_cap = pts_cap;
+        ovl_out o;
+        ovl_compute(&in, &o);
+        if (!o.hit) return;
+        np_to_world(&a, ra, &o);
+        n = o.normal;
+        c = o.centroid;
+        delta = o.depth;
+        vol = o.volume;
+        volumetric = 1;
+    }
+    pd_real le = pr[CP_LE], kc = pr[CP_KC];
+    int in_cohesion = cohesive && kc > PD_R(0) && delta + le > PD_R(0);
+    if (!(delta > PD_R(0)) && !in_cohesion) return;
+
+    /* relative velocity of b with respect to a at the contact point */
+    pd_v3 va = v3_add(v3_load(wd->v, ia), v3_cross(v3_load(wd->w, ia), v3_sub(c, a.x)));
+    pd_v3 vb = v3_add(v3_load(wd->v, ib), v3_cross(v3_load(wd->w, ib), v3_sub(c, b.x)));
+    pd_v3 vrel = v3_sub(vb, va);
+    pd_real vn = -v3_dot(vrel, n); /* approach speed */
+    pd_v3 vt = v3_add(vrel, v3_scale(n, vn));
+    pd_real mstar = cf_effective_mass(wd->inv_m[ia], wd->inv_m[ib]);
+
+    pd_v3 f = v3(0, 0, 0);
+    if (delta > PD_R(0)) {
+        pd_real fn, kn, kt, damp;
+        if (linear) {
+            fn = cf_linear_normal(pr[CP_KE], pr[CP_ETA], delta, vn);
+            kt = pr[CP_KF];
+            damp = 0;
+        } else if (volumetric) {
+            fn = cf_hertz_volume_normal(pr[CP_ESTAR], vol, delta, mstar, pr[CP_GAMMA], vn, &kn);
+            kt = cf_hertz_volume_kt(pr[CP_GSTAR], vol, delta);
+            damp = PD_R(2) * pr[CP_GAMMA] * PD_SQRT(mstar * kt);
+        } else {
+            fn = cf_hertz_sphere_normal(pr[CP_ESTAR], rstar, delta, mstar, pr[CP_GAMMA], vn, &kn);
+            kt = cf_hertz_sphere_kt(pr[CP_GSTAR], rstar, delta);
+            damp = PD_R(2) * pr[CP_GAMMA] * PD_SQRT(mstar * kt);
+        }
+        pd_v3 s = spring0;
+        int loading = kt >= kt0;
+        pd_v3 ft = cf_tangential(&s, n, kt, kt0, loading, v3_scale(vt, wd->dt), vt, damp, pr[CP_MU],
+                                 fn > PD_R(0) ? fn : PD_R(0));
+        f = v3_add(v3_scale(n, fn), ft);
+        res->spring = s;
+        res->kt = kt;
+        res->touching = 1;
+        res->ratio = delta / smin;
+    }
+    if (in_cohesion) /* seed 004 eq. 2.5: the effect surfaces pull b towards a */
+        f = v3_sub(f, v3_scale(n, kc * (delta + le)));
+    res->force = f;
+    res->point = c;
+    res->tq_a = v3_cross(v3_sub(c, a.x), v3_scale(f, -1));
+    res->tq_b = v3_cross(v3_sub(c, b.x), f);
+}
+
+#endif /* PD_CONTACT_PAIR_H */
