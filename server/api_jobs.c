@@ -190,21 +190,23 @@ static int parse_submission(http_req *r, submission *sub, enum MHD_Result *ret)
         scen = json_object_get(sub->doc, "scenario");
         if (!json_is_object(scen)) scen = NULL;
     }
+    size_t before = json_array_size(details);
     if (scen) check_mesh_refs(r, scen, sub->prefix, details);
-    if (json_array_size(details) > 0) {
-        submission_free(sub);
-        *ret = invalid(r, details);
-        return 1;
-    }
-    if (scen == sub->doc) {
+    /* a refused mesh reference must not reach the engine, which would open the file it names */
+    if (json_array_size(details) > before) scen = NULL;
+    if (scen == sub->doc)
         sub->scenario_text = strdup(r->body);
-    } else {
+    else if (scen)
         sub->scenario_text = json_dumps(scen, JSON_INDENT(2) | JSON_REAL_PRECISION(17));
-    }
-    if (!sub->scenario_text) {
+    if (scen && !sub->scenario_text) {
         json_decref(details);
         submission_free(sub);
         *ret = http_error(r, 500, "internal", "out of memory");
+        return 1;
+    }
+    if (!scen) { /* not an object, or it names files: nothing more to check */
+        submission_free(sub);
+        *ret = invalid(r, details);
         return 1;
     }
     pd_diags diags = {0};
@@ -216,14 +218,15 @@ static int parse_submission(http_req *r, submission *sub, enum MHD_Result *ret)
         if (diags.n == 0) detail(details, sub->prefix, "", err.msg);
     }
     pd_diags_free(&diags);
-    if (rc != PD_OK) {
+    if (rc != PD_OK && rc != PD_EINVAL) {
+        json_decref(details);
         submission_free(sub);
-        if (rc == PD_EINVAL) {
-            *ret = invalid(r, details);
-        } else {
-            json_decref(details);
-            *ret = http_error(r, 500, "internal", "scenario: %s", err.msg);
-        }
+        *ret = http_error(r, 500, "internal", "scenario: %s", err.msg);
+        return 1;
+    }
+    if (json_array_size(details) > 0) { /* the wrapper's, the mesh references' and the engine's */
+        submission_free(sub);
+        *ret = invalid(r, details);
         return 1;
     }
     pd_scenario_summarize(sub->s, &sub->sum);

@@ -149,8 +149,6 @@ void http_pointer_escape(const char *in, char *out, size_t cap)
 
 /* ---- routing ------------------------------------------------------------------------------- */
 
-#define MAX_SEGS 6
-
 static int is(const char *a, const char *b)
 {
     return !strcmp(a, b);
@@ -174,109 +172,200 @@ static enum MHD_Result not_found(http_req *r)
     return http_error(r, 404, "not_found", "no route %s %.200s", r->method, r->url);
 }
 
-/* GET and HEAD read; everything else changes state. */
-static int reading(http_req *r)
+/* Adapters from the route table's signature (p: the path's {parameters}) to the handlers. */
+typedef enum MHD_Result (*route_fn)(http_req *r, char **p);
+static enum MHD_Result h_healthz(http_req *r, char **p)
 {
-    return is(r->method, "GET") || is(r->method, "HEAD");
+    return (void)p, api_healthz(r);
+}
+static enum MHD_Result h_metrics(http_req *r, char **p)
+{
+    return (void)p, api_metrics(r);
+}
+static enum MHD_Result h_device(http_req *r, char **p)
+{
+    return (void)p, api_device(r);
+}
+static enum MHD_Result h_events(http_req *r, char **p)
+{
+    return (void)p, api_job_events(r, NULL);
+}
+static enum MHD_Result h_create(http_req *r, char **p)
+{
+    return (void)p, api_jobs_create(r);
+}
+static enum MHD_Result h_list(http_req *r, char **p)
+{
+    return (void)p, api_jobs_list(r);
+}
+static enum MHD_Result h_get(http_req *r, char **p)
+{
+    return api_job_get(r, p[0]);
+}
+static enum MHD_Result h_delete(http_req *r, char **p)
+{
+    return api_job_delete(r, p[0]);
+}
+static enum MHD_Result h_cancel(http_req *r, char **p)
+{
+    return api_job_cancel(r, p[0]);
+}
+static enum MHD_Result h_job_events(http_req *r, char **p)
+{
+    return api_job_events(r, p[0]);
+}
+static enum MHD_Result h_scenario(http_req *r, char **p)
+{
+    return api_job_scenario(r, p[0]);
+}
+static enum MHD_Result h_result(http_req *r, char **p)
+{
+    return api_job_result(r, p[0], 0);
+}
+static enum MHD_Result h_xmf(http_req *r, char **p)
+{
+    return api_job_result(r, p[0], 1);
+}
+static enum MHD_Result h_stats(http_req *r, char **p)
+{
+    return api_job_stats(r, p[0]);
+}
+static enum MHD_Result h_frames(http_req *r, char **p)
+{
+    return api_job_frames(r, p[0], NULL);
+}
+static enum MHD_Result h_frame(http_req *r, char **p)
+{
+    return api_job_frames(r, p[0], p[1]);
+}
+static enum MHD_Result h_shapes(http_req *r, char **p)
+{
+    return api_job_shapes(r, p[0]);
+}
+static enum MHD_Result h_validate(http_req *r, char **p)
+{
+    return (void)p, api_validate(r);
+}
+static enum MHD_Result h_meshes(http_req *r, char **p)
+{
+    return (void)p, api_meshes_upload(r);
 }
 
-/* /v1/jobs/{id}/...: s[0] = "jobs", s[1] = id. */
-static enum MHD_Result route_job(http_req *r, char **s, int n)
+/* Every route the daemon serves; schemas/openapi.yaml describes each (`polydemd --routes`). GET
+ * routes answer HEAD too. Paths under /v1/ need the bearer token when tokens are configured. */
+static const struct route {
+    const char *method, *path;
+    route_fn fn;
+} routes[] = {
+    {"GET", "/healthz", h_healthz},
+    {"GET", "/metrics", h_metrics},
+    {"GET", "/v1/device", h_device},
+    {"GET", "/v1/events", h_events},
+    {"POST", "/v1/jobs", h_create},
+    {"GET", "/v1/jobs", h_list},
+    {"GET", "/v1/jobs/{id}", h_get},
+    {"DELETE", "/v1/jobs/{id}", h_delete},
+    {"POST", "/v1/jobs/{id}/cancel", h_cancel},
+    {"GET", "/v1/jobs/{id}/events", h_job_events},
+    {"GET", "/v1/jobs/{id}/scenario", h_scenario},
+    {"GET", "/v1/jobs/{id}/result", h_result},
+    {"GET", "/v1/jobs/{id}/result.xmf", h_xmf},
+    {"GET", "/v1/jobs/{id}/stats", h_stats},
+    {"GET", "/v1/jobs/{id}/frames", h_frames},
+    {"GET", "/v1/jobs/{id}/frames/{k}", h_frame},
+    {"GET", "/v1/jobs/{id}/shapes", h_shapes},
+    {"POST", "/v1/scenarios/validate", h_validate},
+    {"POST", "/v1/meshes", h_meshes},
+};
+#define NROUTES (sizeof routes / sizeof routes[0])
+
+void http_print_routes(FILE *out)
 {
-    const char *id = s[1];
-    if (strlen(id) >= 24) return http_error(r, 404, "job_not_found", "no job '%.40s'", id);
-    if (n == 2) {
-        if (reading(r)) return api_job_get(r, id);
-        if (is(r->method, "DELETE")) return api_job_delete(r, id);
-        return not_allowed(r, "GET, HEAD, DELETE");
-    }
-    const char *sub = s[2];
-    if (n == 3 && is(sub, "cancel")) {
-        if (is(r->method, "POST")) return api_job_cancel(r, id);
-        return not_allowed(r, "POST");
-    }
-    if (!reading(r)) {
-        if (n <= 4) return not_allowed(r, "GET, HEAD");
-        return not_found(r);
-    }
-    if (n == 3 && is(sub, "events")) return api_job_events(r, id);
-    if (n == 3 && is(sub, "scenario")) return api_job_scenario(r, id);
-    if (n == 3 && is(sub, "result")) return api_job_result(r, id, 0);
-    if (n == 3 && is(sub, "result.xmf")) return api_job_result(r, id, 1);
-    if (n == 3 && is(sub, "stats")) return api_job_stats(r, id);
-    if (n == 3 && is(sub, "shapes")) return api_job_shapes(r, id);
-    if (n == 3 && is(sub, "frames")) return api_job_frames(r, id, NULL);
-    if (n == 4 && is(sub, "frames")) return api_job_frames(r, id, s[3]);
-    return not_found(r);
+    for (size_t i = 0; i < NROUTES; i++)
+        fprintf(out, "%s %s\n", routes[i].method, routes[i].path);
+    fprintf(out, "GET /\nGET /{file}\nGET /static/{file}\nGET /examples/{file}\n"
+                 "GET /vendor/three/{file}\n");
 }
 
-static enum MHD_Result route_v1(http_req *r, char **s, int n)
+#define MAX_SEGS 8
+
+/* Splits a path into its segments (in place); -1 when there are too many. */
+static int split(char *path, char **seg)
 {
-    app *a = r->app;
-    if (a->auth) {
-        const char *tok = auth_bearer(
-            MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_AUTHORIZATION));
-        /* EventSource cannot set headers: the event streams also take ?token= */
-        int events = n >= 1 && is(s[n - 1], "events");
-        if (!tok && events) tok = http_arg(r, "token");
-        if (!tok) return unauthorized(r, "this server needs 'Authorization: Bearer TOKEN'");
-        r->owner = auth_lookup(a->auth, tok);
-        if (!r->owner) return unauthorized(r, "unknown token");
+    int n = 0;
+    char *save = NULL;
+    for (char *t = strtok_r(path, "/", &save); t; t = strtok_r(NULL, "/", &save)) {
+        if (n == MAX_SEGS) return -1;
+        seg[n++] = t;
     }
-    if (n == 0) return not_found(r);
-    if (is(s[0], "jobs")) {
-        if (n == 1) {
-            if (is(r->method, "POST")) return api_jobs_create(r);
-            if (reading(r)) return api_jobs_list(r);
-            return not_allowed(r, "GET, HEAD, POST");
-        }
-        return route_job(r, s, n);
+    return n;
+}
+
+/* Whether a route's template matches the request's segments; its {parameters} go to p. */
+static int match(const char *tmpl, char **seg, int n, char **p)
+{
+    char buf[128], *t[MAX_SEGS];
+    snprintf(buf, sizeof buf, "%s", tmpl);
+    int m = split(buf, t), np = 0;
+    if (m != n) return 0;
+    for (int i = 0; i < n; i++) {
+        if (t[i][0] == '{')
+            p[np++] = seg[i];
+        else if (!is(t[i], seg[i]))
+            return 0;
     }
-    if (n == 2 && is(s[0], "scenarios") && is(s[1], "validate")) {
-        if (is(r->method, "POST")) return api_validate(r);
-        return not_allowed(r, "POST");
+    return 1;
+}
+
+/* The bearer token's owner into r->owner; 0, or 1 when a 401 was queued (in *ret). */
+static int authenticate(http_req *r, int events, enum MHD_Result *ret)
+{
+    const char *tok = auth_bearer(
+        MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_AUTHORIZATION));
+    /* EventSource cannot set headers: the event streams also take ?token= */
+    if (!tok && events) tok = http_arg(r, "token");
+    if (!tok) {
+        *ret = unauthorized(r, "this server needs 'Authorization: Bearer TOKEN'");
+        return 1;
     }
-    if (n == 1 && is(s[0], "meshes")) {
-        if (is(r->method, "POST")) return api_meshes_upload(r);
-        return not_allowed(r, "POST");
+    r->owner = auth_lookup(r->app->auth, tok);
+    if (!r->owner) {
+        *ret = unauthorized(r, "unknown token");
+        return 1;
     }
-    if (n == 1 && is(s[0], "device")) {
-        if (reading(r)) return api_device(r);
-        return not_allowed(r, "GET, HEAD");
-    }
-    if (n == 1 && is(s[0], "events")) {
-        if (reading(r)) return api_job_events(r, NULL);
-        return not_allowed(r, "GET, HEAD");
-    }
-    return not_found(r);
+    return 0;
 }
 
 static enum MHD_Result route(http_req *r)
 {
-    char path[1024], *s[MAX_SEGS];
-    int n = 0;
+    char path[1024], *seg[MAX_SEGS], *p[2] = {NULL, NULL}, allow[64] = "";
     if (strlen(r->url) >= sizeof path)
         return http_error(r, 414, "uri_too_long", "the path is longer than %zu bytes",
                           sizeof path - 1);
-    if (is(r->url, "/healthz")) {
-        if (reading(r)) return api_healthz(r);
-        return not_allowed(r, "GET, HEAD");
+    snprintf(path, sizeof path, "%s", r->url);
+    int n = split(path, seg);
+    const char *method = is(r->method, "HEAD") ? "GET" : r->method;
+    const struct route *hit = NULL;
+    for (size_t i = 0; n >= 0 && i < NROUTES && !hit; i++) {
+        if (!match(routes[i].path, seg, n, p)) continue;
+        if (is(routes[i].method, method)) {
+            hit = &routes[i];
+        } else if (!strstr(allow, routes[i].method)) {
+            size_t k = strlen(allow);
+            snprintf(allow + k, sizeof allow - k, "%s%s%s", k ? ", " : "", routes[i].method,
+                     is(routes[i].method, "GET") ? ", HEAD" : "");
+        }
     }
-    if (is(r->url, "/metrics")) {
-        if (reading(r)) return api_metrics(r);
-        return not_allowed(r, "GET, HEAD");
+    int v1 = !strncmp(r->url, "/v1/", 4) || is(r->url, "/v1");
+    if (v1 && r->app->auth) {
+        enum MHD_Result ret;
+        if (authenticate(r, n > 0 && is(seg[n - 1], "events"), &ret)) return ret;
     }
-    if (strncmp(r->url, "/v1/", 4) && !is(r->url, "/v1")) {
-        if (reading(r)) return static_serve(r, r->url);
-        return not_allowed(r, "GET, HEAD");
-    }
-    snprintf(path, sizeof path, "%s", r->url + 3);
-    char *save = NULL;
-    for (char *t = strtok_r(path, "/", &save); t; t = strtok_r(NULL, "/", &save)) {
-        if (n == MAX_SEGS) return not_found(r);
-        s[n++] = t;
-    }
-    return route_v1(r, s, n);
+    if (hit) return hit->fn(r, p);
+    if (allow[0]) return not_allowed(r, allow);
+    if (v1 || is(r->url, "/healthz") || is(r->url, "/metrics")) return not_found(r);
+    if (is(method, "GET")) return static_serve(r, r->url);
+    return not_allowed(r, "GET, HEAD");
 }
 
 /* ---- libmicrohttpd callbacks --------------------------------------------------------------- */
@@ -445,11 +534,11 @@ int http_start(app *a, struct MHD_Daemon **out, unsigned *port, char *msg, size_
     unsigned flags = MHD_USE_AUTO_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG;
     if (v6) flags |= MHD_USE_IPv6;
     struct MHD_Daemon *d = MHD_start_daemon(
-        flags, 0, NULL, NULL, on_request, a, MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
-        MHD_OPTION_THREAD_POOL_SIZE, (unsigned)a->cfg->http_threads, MHD_OPTION_CONNECTION_LIMIT,
+        flags, 0, NULL, NULL, on_request, a, MHD_OPTION_EXTERNAL_LOGGER, on_log, NULL,
+        MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss, MHD_OPTION_THREAD_POOL_SIZE,
+        (unsigned)a->cfg->http_threads, MHD_OPTION_CONNECTION_LIMIT,
         (unsigned)a->cfg->max_connections, MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120,
-        MHD_OPTION_NOTIFY_COMPLETED, on_completed, a, MHD_OPTION_EXTERNAL_LOGGER, on_log, NULL,
-        MHD_OPTION_END);
+        MHD_OPTION_NOTIFY_COMPLETED, on_completed, a, MHD_OPTION_END);
     if (!d) {
         snprintf(msg, ml, "cannot listen on '%s' (address in use, or not allowed)", a->cfg->listen);
         return -1;

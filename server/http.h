@@ -19,6 +19,7 @@
 #include <jansson.h>
 #include <microhttpd.h>
 #include <stdatomic.h>
+#include <stdio.h>
 
 /* What every handler can reach. */
 typedef struct app {
@@ -49,6 +50,9 @@ typedef struct http_req {
 
 /* Starts serving cfg->listen; the bound port goes to *port. -1 with a message on failure. */
 int http_start(app *a, struct MHD_Daemon **out, unsigned *port, char *msg, size_t msglen);
+
+/* Prints every route as "METHOD PATH" lines (`polydemd --routes`). */
+void http_print_routes(FILE *out);
 
 /* Stop accepting new connections (the listening socket closes); requests in flight go on. */
 void http_quiesce(struct MHD_Daemon *d);

@@ -141,6 +141,10 @@ int main(int argc, char **argv)
     static config cfg;
     static app a;
     char msg[1024], dbpath[4400];
+    if (argc == 2 && !strcmp(argv[1], "--routes")) { /* for the OpenAPI test */
+        http_print_routes(stdout);
+        return 0;
+    }
     config_defaults(&cfg);
     int rc = config_from_args(&cfg, argc, argv);
     if (rc != 0) return rc > 0 ? 0 : 2;

@@ -241,7 +241,6 @@ static void open_device(worker *w)
 static void *worker_main(void *arg)
 {
     worker *w = arg;
-    open_device(w);
     pthread_mutex_lock(&w->mu);
     int test = w->dev && w->cfg->selftest && !w->stop;
     if (w->dev && !w->cfg->selftest) {
@@ -313,8 +312,17 @@ int worker_start(const config *cfg, job_store *st, sse_hub *hub, worker **out, c
         free(w);
         return -1;
     }
-    if (pthread_mutex_init(&w->mu, NULL) != 0 || pthread_cond_init(&w->cv, NULL) != 0 ||
-        pthread_create(&w->thread, NULL, worker_main, w) != 0) {
+    if (pthread_mutex_init(&w->mu, NULL) != 0 || pthread_cond_init(&w->cv, NULL) != 0) {
+        snprintf(msg, ml, "cannot create the worker's mutex");
+        free(w->series);
+        free(w);
+        return -1;
+    }
+    /* The OpenCL platform loads here, in the main thread: PoCL's LLVM installs an alternate
+     * signal stack in the thread that first loads it, which a worker thread could not free at
+     * its exit (AddressSanitizer aborts there). */
+    open_device(w);
+    if (pthread_create(&w->thread, NULL, worker_main, w) != 0) {
         snprintf(msg, ml, "cannot start the worker thread");
         free(w->series);
         free(w);

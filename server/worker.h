@@ -21,8 +21,10 @@ typedef struct worker worker;
 enum { DEV_STARTING, DEV_READY, DEV_FAILED, DEV_UNAVAILABLE };
 
 /*
- * Starts the worker thread: it opens cfg->device, runs the self-test (unless cfg->selftest is 0)
- * and then runs queued jobs. Results go to <data>/results, meshes resolve in <data>/meshes.
+ * Opens cfg->device (in the calling thread; a device that does not open leaves the worker
+ * DEV_UNAVAILABLE, jobs waiting) and starts the worker thread: it runs the self-test (unless
+ * cfg->selftest is 0), then the queued jobs. Results go to <data>/results, meshes resolve in
+ * <data>/meshes.
  */
 int worker_start(const config *cfg, job_store *st, sse_hub *hub, worker **out, char *msg,
                  size_t msglen);
