@@ -1,0 +1,95 @@
+#!/bin/sh
+# test_lifecycle.sh - jobs across cancellation, shutdown and crashes, against the real engine:
+# cancelling a running job stops it within seconds while its event stream shows progress and
+# then the cancellation; SIGTERM during a run exits 0 and the job runs again after the restart,
+# after a higher-priority job and before a later one of equal priority; after kill -9 the
+# restarted daemon queues the interrupted job again, serves no half-written result, and the
+# job succeeds. tests/server/long_job.json runs a few seconds. Prints "N passed, N failed".
+. tests/server/lib.sh
+
+quick_scenario "$tmp/quick.json"
+python3 -c '
+import json, sys
+s = json.load(open(sys.argv[1]))
+json.dump({"scenario": s, "priority": 10, "tags": ["high"]}, open(sys.argv[2], "w"))
+' "$tmp/quick.json" "$tmp/high.json"
+printf 'progress_interval = 0.1\n' >"$tmp/fast.conf"
+data="$tmp/data"
+
+# wait_progress ID: waits (up to 60 s) until the job runs and has made progress
+wait_progress() {
+    i=0
+    while [ $i -lt 600 ]; do
+        curl -s --max-time 5 -o "$tmp/wp.json" "$URL/v1/jobs/$1"
+        case "$(jget "$tmp/wp.json" 'str(d["status"] == "running" and (d["progress"] or {}).get("step", 0) > 0)')" in
+        True) return 0 ;;
+        esac
+        case "$(jget "$tmp/wp.json" 'd["status"]')" in succeeded | failed | cancelled) return 1 ;; esac
+        sleep 0.1
+        i=$((i + 1))
+    done
+    return 1
+}
+
+start_daemon "$data" --no-selftest --config "$tmp/fast.conf" || { summary; exit 1; }
+
+# ---- cancel a running job while a client follows its events
+l1=$(submit tests/server/long_job.json)
+if wait_progress "$l1"; then ok long_job_runs; else bad long_job_runs "$(cat "$tmp/wp.json")"; fi
+python3 tests/server/sse.py "$URL/v1/jobs/$l1/events" 60 >"$tmp/l1.sse" 2>&1 &
+sse_pid=$!
+sleep 0.5
+t0=$(date +%s.%N)
+code=$(req POST "/v1/jobs/$l1/cancel")
+check cancel_running_202 "202 running" "$code $(jstr status)"
+st=$(wait_status "$l1" cancelled 10)
+t1=$(date +%s.%N)
+check cancel_running_stops "cancelled" "$st"
+check cancel_within_2s true "$(awk -v a="$t0" -v b="$t1" 'BEGIN { print (b - a <= 2) ? "true" : "false" }')"
+wait "$sse_pid"
+check sse_ends_with_job 0 "$?"
+check sse_progress_then_cancelled true "$(python3 -c '
+import json, sys
+ev = [json.loads(l) for l in open(sys.argv[1]) if l.startswith("{")]
+prog = [e for e in ev if e["event"] == "progress"]
+steps = [e["data"]["progress"]["step"] for e in prog]
+print(str(len(prog) >= 2 and steps == sorted(steps) and ev[-1]["event"] == "status"
+          and ev[-1]["data"]["status"] == "cancelled").lower())' "$tmp/l1.sse")"
+code=$(req GET "/v1/jobs/$l1/result")
+check cancelled_has_no_result 409 "$code"
+check cancelled_leaves_no_file 0 "$(ls "$data/results" | grep -c "^$l1")"
+
+# ---- SIGTERM while a job runs: exit 0, the job is queued again and re-runs after a restart
+l2=$(submit tests/server/long_job.json)
+wait_progress "$l2" || bad long_job_2_runs "$(cat "$tmp/wp.json")"
+low=$(submit "$tmp/quick.json")
+high=$(submit "$tmp/high.json")
+stop_daemon TERM && ok sigterm_during_run_exit_0
+check sigterm_requeues_job true "$(grep -q "job $l2 stopped by shutdown, queued again" "$LOG" && echo true)"
+start_daemon "$data" --no-selftest --config "$tmp/fast.conf" || { summary; exit 1; }
+check requeued_job_succeeds succeeded "$(wait_status "$l2" succeeded 60)"
+check low_priority_job_succeeds succeeded "$(wait_status "$low" succeeded 30)"
+for j in "$high" "$l2" "$low"; do
+    curl -s -o "$tmp/$j.json" "$URL/v1/jobs/$j"
+done
+check queue_order_priority_then_age true "$(python3 -c '
+import json, sys
+s = [json.load(open(sys.argv[1] + "/" + j + ".json"))["started_at"] for j in sys.argv[2:]]
+print(str(None not in s and s[0] < s[1] < s[2]).lower())' "$tmp" "$high" "$l2" "$low")"
+
+# ---- kill -9 while a job runs: the restart queues it again, no partial result is served
+l3=$(submit tests/server/long_job.json)
+wait_progress "$l3" || bad long_job_3_runs "$(cat "$tmp/wp.json")"
+stop_daemon KILL
+check partial_left_by_crash true "$([ -e "$data/results/$l3.h5.partial" ] && echo true)"
+start_daemon "$data" --no-selftest --config "$tmp/fast.conf" || { summary; exit 1; }
+check crash_recovery_logged true "$(grep -q 'recovered after a crash: 1 job(s) queued again' "$LOG" && echo true)"
+code=$(req GET "/v1/jobs/$l3/result")
+check no_result_while_rerunning "409 result_not_ready" "$code $(jstr code)"
+check crashed_job_succeeds succeeded "$(wait_status "$l3" succeeded 60)"
+code=$(req GET "/v1/jobs/$l3/result")
+check crashed_job_result_200 200 "$code"
+check no_partial_files 0 "$(ls "$data/results" | grep -c 'partial$')"
+stop_daemon TERM && ok sigterm_idle_exit_0
+
+summary
