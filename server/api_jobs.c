@@ -212,13 +212,14 @@ static int parse_submission(http_req *r, submission *sub, enum MHD_Result *ret)
     pd_diags diags = {0};
     pd_error err = {0};
     int rc = pd_scenario_parse(sub->scenario_text, r->app->meshes_dir, &sub->s, &diags, &err);
-    if (rc == PD_EINVAL) {
-        for (int i = 0; i < diags.n; i++)
-            detail(details, sub->prefix, diags.items[i].path, diags.items[i].msg);
-        if (diags.n == 0) detail(details, sub->prefix, "", err.msg);
-    }
+    /* diagnostics are the scenario's problems whatever the code (a scenario missing its
+     * materials is reported with PD_ENOMEM by the engine today) */
+    for (int i = 0; rc != PD_OK && i < diags.n; i++)
+        detail(details, sub->prefix, diags.items[i].path, diags.items[i].msg);
+    if (rc == PD_EINVAL && diags.n == 0) detail(details, sub->prefix, "", err.msg);
+    int internal = rc != PD_OK && rc != PD_EINVAL && diags.n == 0;
     pd_diags_free(&diags);
-    if (rc != PD_OK && rc != PD_EINVAL) {
+    if (internal) {
         json_decref(details);
         submission_free(sub);
         *ret = http_error(r, 500, "internal", "scenario: %s", err.msg);

@@ -60,6 +60,8 @@ check wrapped_invalid_paths \
     "$code $(jget "$tmp/body" 'sorted(x["path"] for x in d["error"]["details"])')"
 code=$(req POST /v1/jobs --data-binary @"$tmp/pathmesh.json")
 check mesh_paths_refused "422 /shapes/r/mesh" "$code $(jstr path)"
+code=$(req POST /v1/jobs --data-binary '{"time": 1}')
+check missing_members_422 "422 invalid_scenario /time" "$code $(jstr code) $(jstr path)"
 code=$(req POST /v1/jobs --data-binary '[1, 2]')
 check array_body_422 "422 invalid_scenario" "$code $(jstr code)"
 
