@@ -172,13 +172,15 @@ hdr="$tmp/auth"
 : >"$hdr"
 chmod 600 "$hdr"
 [ -z "$token" ] || printf 'Authorization: Bearer %s\n' "$token" >"$hdr"
-http() { # METHOD PATH [BODY_FILE [EXTRA_HEADER]] -> body in $tmp/body, prints the HTTP status
+http() { # METHOD PATH [BODY_FILE [HEADER]] -> body in $tmp/body, prints the HTTP status
     local args=(-sS -o "$tmp/body" -D "$tmp/headers" -w '%{http_code}' --connect-timeout 5 --max-time 60
         -H @"$hdr" -X "$1")
     if [ $# -ge 3 ]; then
-        args+=(-H 'Content-Type: application/json' --data-binary @"$3" --retry 2 --retry-delay 1)
+        local ctype='Content-Type: application/json' extra=${4:-}
+        case "$extra" in Content-Type:*) ctype=$extra extra="" ;; esac
+        args+=(-H "$ctype" --data-binary @"$3" --retry 2 --retry-delay 1)
+        if [ -n "$extra" ]; then args+=(-H "$extra"); fi
     fi
-    if [ $# -ge 4 ]; then args+=(-H "$4"); fi
     local code
     code=$(curl "${args[@]}" "$server$2" 2>"$tmp/curlerr") || code=000
     echo "$code"
@@ -199,11 +201,32 @@ case "$code" in
 *) die 3 "$server does not look like polydemd: GET /healthz answered $code" ;;
 esac
 
+# Mesh files named by path (shapes and walls) go up through /v1/meshes: the daemon cannot read
+# this machine's files. The scenario then names them by the returned id.
+base_dir=$(dirname "$scenario")
+cp "$scenario" "$tmp/scenario.json"
+scenario="$tmp/scenario.json"
+jq -r '[(.shapes // {} | to_entries[] | ["shapes", .key, .value.mesh]),
+        (.walls // [] | to_entries[] | ["walls", .key, .value.mesh])]
+       | .[] | select(.[2] | type == "string" and (startswith("sha256:") | not)) | @tsv' \
+    "$scenario" >"$tmp/meshes.tsv"
+while IFS=$'\t' read -r where key file; do
+    [ -n "$where" ] || continue
+    case "$file" in /*) path=$file ;; *) path="$base_dir/$file" ;; esac
+    [ -r "$path" ] || die 2 "$where/$key: cannot read mesh file '$path'"
+    code=$(http POST /v1/meshes "$path" "Content-Type: application/octet-stream")
+    [ "$code" = 200 ] || [ "$code" = 201 ] || die 2 "$where/$key: mesh '$path' refused ($code): $(http_error)"
+    mesh_id=$(jq -r '.id' "$tmp/body")
+    jq --arg w "$where" --arg k "$key" --arg id "$mesh_id" \
+        'if $w == "shapes" then .shapes[$k].mesh = $id else .walls[$k | tonumber].mesh = $id end' \
+        "$scenario" >"$tmp/scenario2.json" && mv "$tmp/scenario2.json" "$scenario"
+    echo "$prog: uploaded $path as $mesh_id" >&2
+done <"$tmp/meshes.tsv"
+
 echo "$prog: $sweep_id: submitting $njobs jobs to $server" >&2
 base_name=$(jq -r '.name // "scenario"' "$scenario")
 ids=()
 states=()
-errors=()
 for ((i = 0; i < njobs; i++)); do
     name="${base_name:0:52}-$i"
     jq --slurpfile sets "$tmp/sets.json" --slurpfile grid "$tmp/grid.json" --arg name "$name" \
@@ -229,7 +252,6 @@ for ((i = 0; i < njobs; i++)); do
         [ -n "$id" ] || die 3 "POST /v1/jobs answered $code without a job id: $(head -c 300 "$tmp/body")"
         ids+=("$id")
         states+=(queued)
-        errors+=("")
         ;;
     401 | 403) die 3 "the server refused the token ($code): $(http_error)" ;;
     000) die 3 "lost contact with $server: $(head -c 300 "$tmp/curlerr")" ;;
@@ -240,7 +262,6 @@ for ((i = 0; i < njobs; i++)); do
             "$tmp/sets.json")) refused ($code): $msg" >&2
         ids+=("")
         states+=(rejected)
-        errors+=("$msg")
         ;;
     esac
 done
@@ -256,9 +277,15 @@ while :; do
     for ((i = 0; i < njobs; i++)); do
         case "${states[i]}" in
         succeeded) done_n=$((done_n + 1)); continue ;;
-        failed | cancelled | rejected) failed=$((failed + 1)); continue ;;
+        failed | cancelled | rejected | deleted) failed=$((failed + 1)); continue ;;
         esac
         code=$(http GET "/v1/jobs/${ids[i]}")
+        if [ "$code" = 404 ]; then
+            echo "$prog: job ${ids[i]} is gone (deleted by someone?)" >&2
+            states[i]=deleted
+            failed=$((failed + 1))
+            continue
+        fi
         if [ "$code" != 200 ]; then
             if [ $(($(date +%s) - last_ok)) -gt 30 ]; then
                 die 3 "lost contact with $server for 30 s (last answer $code): $(head -c 200 "$tmp/curlerr")"
@@ -274,7 +301,6 @@ while :; do
         succeeded) done_n=$((done_n + 1)) ;;
         failed | cancelled)
             failed=$((failed + 1))
-            errors[i]=$err
             echo "$prog: job ${ids[i]} $st${err:+: $err}" >&2
             ;;
         running)
