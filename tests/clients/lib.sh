@@ -75,6 +75,32 @@ quick_scenario() { # OUT_FILE
         examples/collision.json >"$1"
 }
 
+# A unit cube as a Wavefront OBJ (outward triangles), for the clients' mesh uploads.
+cube_obj() { # OUT_FILE
+    cat >"$1" <<'OBJ'
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+f 1 3 2
+f 1 4 3
+f 5 6 7
+f 5 7 8
+f 1 2 6
+f 1 6 5
+f 2 3 7
+f 2 7 6
+f 3 4 8
+f 3 8 7
+f 4 1 5
+f 4 5 8
+OBJ
+}
+
 summary() {
     if [ "$failed" -ne 0 ] && [ -s "$tmp/polydemd.log" ]; then
         echo "-- polydemd log (last 15 lines):"

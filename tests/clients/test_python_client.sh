@@ -96,6 +96,15 @@ if start_daemon; then
         "$(tail -n +2 "$tmp/sweep.csv" | cut -d, -f2,3 | tr '\n' ' ' | sed 's/ $//')"
     timeout 30 python3 -B "$CLIENT" --server "$URL" --timeout 120 submit "$tmp/nothere.json" >/dev/null 2>&1
     check missing_file_with_daemon 2 "$?"
+    # a shape given as a mesh file beside the scenario is uploaded and the job runs
+    mkdir -p "$tmp/withmesh"
+    cube_obj "$tmp/withmesh/cube.obj"
+    jq '.shapes.r = {"mesh": "cube.obj"}' "$tmp/quick.json" >"$tmp/withmesh/scenario.json"
+    id=$(timeout 60 python3 -B "$CLIENT" --server "$URL" --timeout 60 submit "$tmp/withmesh/scenario.json" --wait \
+        2>"$tmp/err")
+    rc=$?
+    if [ "$rc" = 0 ] && curl -s "$URL/v1/jobs/$id/scenario" | jq -e '.shapes.r.mesh | startswith("sha256:")' >/dev/null; then
+        ok mesh_file_uploaded; else bad mesh_file_uploaded "exit $rc: $(tail -n 3 "$tmp/err")"; fi
     jq '.interactions[0].friction = -1' "$tmp/quick.json" >"$tmp/invalid.json"
     timeout 30 python3 -B "$CLIENT" --server "$URL" --timeout 120 submit "$tmp/invalid.json" >/dev/null 2>"$tmp/err"
     rc=$?

@@ -61,6 +61,15 @@ if start_daemon; then
     check jobs_tagged_with_sweep_id 4 "$n"
     if grep -q '4/4 succeeded' "$tmp/sweep.err"; then ok progress_on_stderr; else
         bad progress_on_stderr "no '4/4 succeeded' line: $(tail -n 2 "$tmp/sweep.err")"; fi
+    # mesh files named by path are uploaded once and the jobs name them by id
+    mkdir -p "$tmp/withmesh"
+    cube_obj "$tmp/withmesh/cube.obj"
+    jq '.shapes.r = {"mesh": "cube.obj"}' "$tmp/quick.json" >"$tmp/withmesh/scenario.json"
+    timeout 100 bash "$SWEEP" --server "$URL" "$tmp/withmesh/scenario.json" --set '/seed=1' \
+        --out "$tmp/mesh.csv" --poll 0.3 2>"$tmp/mesh.err"
+    rc=$?
+    if [ "$rc" = 0 ] && grep -q "uploaded .*cube.obj as sha256:" "$tmp/mesh.err"; then ok mesh_file_uploaded; else
+        bad mesh_file_uploaded "exit $rc: $(tail -n 3 "$tmp/mesh.err")"; fi
     # a refused grid point gets its row and a message; the others go on
     timeout 150 bash "$SWEEP" --server "$URL" "$tmp/quick.json" --set '/interactions/0/friction=0.3,-1' \
         --out "$tmp/mixed.csv" --poll 0.3 2>"$tmp/mixed.err"
