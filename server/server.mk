@@ -23,3 +23,16 @@ format-server:
 	clang-format -i server/*.c server/*.h
 format-check-server:
 	@clang-format --dry-run -Werror server/*.c server/*.h
+
+# make install [PREFIX=/usr/local] [DESTDIR=]: the commands, the dashboard, the examples and the
+# deployment files (deploy/README.md); polydemd finds <prefix>/share/polydem beside <prefix>/bin.
+PREFIX ?= /usr/local
+.PHONY: install
+install: $(BUILD)/polydem $(BUILD)/polydemd
+	install -d $(DESTDIR)$(PREFIX)/bin $(DESTDIR)$(PREFIX)/share/polydem/dashboard \
+		$(DESTDIR)$(PREFIX)/share/polydem/examples $(DESTDIR)$(PREFIX)/share/polydem/deploy
+	install -m 0755 $(BUILD)/polydem $(BUILD)/polydemd $(DESTDIR)$(PREFIX)/bin/
+	cp -R clients/dashboard/. $(DESTDIR)$(PREFIX)/share/polydem/dashboard/
+	install -m 0644 examples/*.json $(DESTDIR)$(PREFIX)/share/polydem/examples/
+	install -m 0644 deploy/polydemd.service deploy/polydemd.conf.example deploy/README.md \
+		$(DESTDIR)$(PREFIX)/share/polydem/deploy/

@@ -310,6 +310,10 @@ code=$(req GET "/v1/jobs/$aid/events?token=bob-0123456789abcdef")
 check events_other_token_404 404 "$code"
 stop_daemon TERM
 
+# ---- the example config of deploy/ is one this daemon reads (flags override its paths)
+start_daemon "$tmp/cdata" --config deploy/polydemd.conf.example --tokens "$tmp/tokens" --device 99 &&
+    check example_config_starts 401 "$(req GET /v1/jobs)" && stop_daemon TERM
+
 # ---- refusals at start: exit 2 with a message
 "$POLYDEMD_BIN" --listen 0.0.0.0:0 --data "$tmp/x" --device 99 >"$tmp/r1.log" 2>&1
 check non_loopback_without_tokens "1 refusing" "$? $(grep -o refusing "$tmp/r1.log")"
