@@ -2,7 +2,7 @@
 // against time from /stats (refreshed while it runs; the progress events fill in until /stats
 // answers), the 3D viewer of any output frame with a time slider and play, and downloads.
 
-import { api, ApiError, getToken, jobPath, watchJob, normalizeStats, FINISHED } from './api.js';
+import { api, ApiError, getToken, flat, jobPath, watchJob, normalizeStats, FINISHED } from './api.js';
 import { el, statusBadge, progressBar, si, count, duration, date } from './format.js';
 import { mountNav, showMessage } from './nav.js';
 import { Plot } from './plot.js';
@@ -120,7 +120,9 @@ async function loadStats() {
       plots.ke.setData([{ name: 'kinetic energy', x: s.time, y: s.kinetic_energy }]);
       plots.contacts.setData([{ name: 'contacts', x: s.time, y: s.contacts }]);
       const walls = Object.entries(s.walls);
-      plots.walls.empty = 'no walls in this scenario';
+      const hasWalls = scenario && (scenario.walls || []).length > 0;
+      plots.walls.empty = hasWalls && !FINISHED.includes(job.status)
+        ? 'wall forces are shown when the job has finished' : 'no walls in this scenario';
       plots.walls.setData(walls.map(([name, y]) => ({ name, x: s.time, y })));
       $('plot-note').textContent = `${count(s.time.length)} stats rows`;
     }
@@ -180,6 +182,14 @@ async function loadViewer() {
   slider.disabled = view.frames < 2;
   $('play').disabled = view.frames < 2;
   show(0, frame0);
+  // Frame the first and the last positions together (the particles may travel far); a double
+  // click frames them again.
+  const fitAll = async () => {
+    const last = view.frames > 1 ? await getFrame(view.frames - 1).catch(() => null) : null;
+    view.viewer.fit([flat(frame0.position), ...(last ? [flat(last.position)] : [])]);
+  };
+  fitAll();
+  $('viewer').addEventListener('dblclick', fitAll);
 }
 
 function frameCount(info, frame0) {

@@ -73,11 +73,15 @@ export class Viewer {
       return { mesh, particles };
     });
     for (const w of info.walls || []) {
-      const m = new THREE.Mesh(geometry(w.vertices, w.triangles), new THREE.MeshLambertMaterial({
-        color: 0x8c959f, transparent: true, opacity: 0.3, depthWrite: false, side: THREE.DoubleSide,
+      // a faint surface and its edges: walls frame the scene without hiding the particles
+      const g = geometry(w.vertices, w.triangles);
+      const m = new THREE.Mesh(g, new THREE.MeshLambertMaterial({
+        color: 0x8c959f, transparent: true, opacity: 0.12, depthWrite: false, side: THREE.DoubleSide,
       }));
       m.name = w.name;
       this.walls.add(m);
+      this.walls.add(new THREE.LineSegments(new THREE.EdgesGeometry(g, 20),
+        new THREE.LineBasicMaterial({ color: 0x6e7781, transparent: true, opacity: 0.6 })));
     }
     this.fitted = false;
   }
@@ -98,23 +102,43 @@ export class Viewer {
       });
       mesh.instanceMatrix.needsUpdate = true;
     }
-    if (!this.fitted) this.fit(p);
+    if (!this.fitted) this.fit([p]);
     this.render();
   }
 
-  // Camera on the particles' bounding box, looking from the front-right, slightly above.
-  fit(p) {
-    const box = new THREE.Box3();
-    const v = new THREE.Vector3();
-    for (let i = 0; i < p.length / 3; i++) {
-      const r = (this.size[i] || 0) / 2;
-      box.expandByPoint(v.set(p[3 * i] - r, p[3 * i + 1] - r, p[3 * i + 2] - r));
-      box.expandByPoint(v.set(p[3 * i] + r, p[3 * i + 1] + r, p[3 * i + 2] + r));
+  // Camera on the bounding box of the particles in the given frames' positions (e.g. the first
+  // and the last frame, so that everything they do stays in view), looking from the
+  // front-right, slightly above.
+  // Of many particles, the 5% furthest out along each axis are left out (a few that fly off
+  // would shrink the rest to a speck).
+  fit(positions) {
+    const axes = [[], [], []];
+    let rmax = 0;
+    for (const p of positions) {
+      for (let i = 0; i < p.length / 3; i++) {
+        if (!Number.isFinite(p[3 * i] + p[3 * i + 1] + p[3 * i + 2])) continue;
+        for (let k = 0; k < 3; k++) axes[k].push(p[3 * i + k]);
+        rmax = Math.max(rmax, (this.size[i] || 0) / 2);
+      }
     }
-    if (box.isEmpty()) return;
+    const n = axes[0].length;
+    if (!n) return;
+    const cut = n >= 50 ? Math.floor(0.05 * n) : 0;
+    const lo = [], hi = [];
+    for (const a of axes) {
+      a.sort((x, y) => x - y);
+      lo.push(a[cut] - rmax);
+      hi.push(a[n - 1 - cut] + rmax);
+    }
+    const box = new THREE.Box3(new THREE.Vector3(...lo), new THREE.Vector3(...hi));
     const centre = box.getCenter(new THREE.Vector3());
-    const radius = Math.max(box.getSize(new THREE.Vector3()).length() / 2, 1e-3);
-    const dist = (radius / Math.sin((this.camera.fov * Math.PI) / 360)) * 1.1;
+    const size = box.getSize(new THREE.Vector3());
+    // Seen from slightly above, the box spans about its horizontal diagonal across and its
+    // height plus part of that diagonal up; back off until both fit.
+    const across = Math.max(Math.hypot(size.x, size.y), 1e-3);
+    const up = size.z + 0.5 * across;
+    const tan = Math.tan((this.camera.fov * Math.PI) / 360);
+    const dist = 1.15 * Math.max(up / 2 / tan, across / 2 / (tan * this.camera.aspect)) + across / 2;
     const dir = new THREE.Vector3(0.55, -1, 0.6).normalize();
     this.camera.position.copy(centre).addScaledVector(dir, dist);
     this.camera.near = dist / 100;
@@ -123,6 +147,7 @@ export class Viewer {
     this.controls.target.copy(centre);
     this.controls.update();
     this.fitted = true;
+    this.render();
   }
 
   render() {
