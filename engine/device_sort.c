@@ -6,10 +6,18 @@
 /* Chunked work: at most this many work-items scan serially inside scan_top. */
 #define SCAN_MAX_WORK 1024
 
+/*
+ * Work-groups of a fixed size, the global size rounded up to it (every kernel checks its range).
+ * A fixed shape matters on PoCL, which compiles a kernel anew for each work-group size it picks,
+ * and it would pick a new one whenever the number of pairs changes.
+ */
+#define LAUNCH_GROUP 64
+
 int cl_launch(pd_device *dev, cl_kernel k, size_t n, const char *what, pd_error *err)
 {
     if (n == 0) return PD_OK;
-    cl_int e = clEnqueueNDRangeKernel(dev->queue, k, 1, NULL, &n, NULL, 0, NULL, NULL);
+    size_t local = LAUNCH_GROUP, global = (n + local - 1) / local * local;
+    cl_int e = clEnqueueNDRangeKernel(dev->queue, k, 1, NULL, &global, &local, 0, NULL, NULL);
     return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, what, e);
 }
 
@@ -21,11 +29,10 @@ int dsort_init(dsort *s, pd_device *dev, int dbl, pd_error *err)
     int rc = cl_program_get(dev, "sort", dbl, &p, err);
     if (rc != PD_OK) return rc;
     cl_int e = CL_SUCCESS;
-    const char *names[6] = {"scan_partial", "scan_top",      "scan_apply",
-                            "radix_count",  "radix_scatter", "swap_keys"};
-    cl_kernel *ks[6] = {&s->k_partial, &s->k_top,     &s->k_apply,
-                        &s->k_count,   &s->k_scatter, &s->k_swap};
-    for (int i = 0; i < 6; i++) {
+    const char *names[5] = {"scan_partial", "scan_top", "scan_apply", "radix_count",
+                            "radix_scatter"};
+    cl_kernel *ks[5] = {&s->k_partial, &s->k_top, &s->k_apply, &s->k_count, &s->k_scatter};
+    for (int i = 0; i < 5; i++) {
         *ks[i] = clCreateKernel(p, names[i], &e);
         if (e != CL_SUCCESS) {
             dsort_free(s);
@@ -42,8 +49,8 @@ int dsort_init(dsort *s, pd_device *dev, int dbl, pd_error *err)
 
 void dsort_free(dsort *s)
 {
-    cl_kernel ks[6] = {s->k_partial, s->k_top, s->k_apply, s->k_count, s->k_scatter, s->k_swap};
-    for (int i = 0; i < 6; i++)
+    cl_kernel ks[5] = {s->k_partial, s->k_top, s->k_apply, s->k_count, s->k_scatter};
+    for (int i = 0; i < 5; i++)
         if (ks[i]) clReleaseKernel(ks[i]);
     if (s->part) clReleaseMemObject(s->part);
     if (s->count) clReleaseMemObject(s->count);
@@ -145,15 +152,4 @@ int dsort_radix(dsort *s, cl_mem *key, cl_mem *val, cl_mem *key_tmp, cl_mem *val
         *val_tmp = t;
     }
     return PD_OK;
-}
-
-int dsort_swap_keys(dsort *s, cl_mem key, int n, cl_mem swapped, cl_mem index, pd_error *err)
-{
-    cl_int e = CL_SUCCESS;
-    e |= ARG(s->k_swap, 0, key);
-    e |= ARG(s->k_swap, 1, n);
-    e |= ARG(s->k_swap, 2, swapped);
-    e |= ARG(s->k_swap, 3, index);
-    if (e != CL_SUCCESS) return pd_error_set(err, PD_ECL, "opencl: swap_keys arguments");
-    return cl_launch(s->dev, s->k_swap, (size_t)n, "swap_keys", err);
 }

@@ -1,6 +1,6 @@
 /*
  * device_sort.h - prefix sums and stable radix sorting of 64-bit keys on an OpenCL device
- * (kernels/sort.cl): the sorting stages of the broad phase and of the force gather.
+ * (kernels/sort.cl): the broad phase's Morton sort and the scans of pair counts.
  * Engine-internal. Lifecycle: dsort_init -> dsort_scan / dsort_radix ... -> dsort_free.
  */
 #ifndef PD_DEVICE_SORT_H
@@ -10,7 +10,7 @@
 
 typedef struct dsort {
     pd_device *dev;
-    cl_kernel k_partial, k_top, k_apply, k_count, k_scatter, k_swap;
+    cl_kernel k_partial, k_top, k_apply, k_count, k_scatter;
     cl_mem part;  /* chunk sums of a scan */
     cl_mem count; /* digit counts of a radix pass */
     cl_mem first; /* their exclusive scan */
@@ -31,10 +31,8 @@ int dsort_scan(dsort *s, cl_mem in, int n, cl_mem out, pd_error *err);
 int dsort_radix(dsort *s, cl_mem *key, cl_mem *val, cl_mem *key_tmp, cl_mem *val_tmp, int n,
                 const int *shifts, int npass, pd_error *err);
 
-/* swapped[i] = key[i] with its 32-bit halves exchanged, index[i] = i. */
-int dsort_swap_keys(dsort *s, cl_mem key, int n, cl_mem swapped, cl_mem index, pd_error *err);
-
-/* Enqueues kernel k over n work-items (nothing when n <= 0); names it in errors. */
+/* Enqueues kernel k over at least n work-items in groups of 64 (nothing when n is 0); the
+ * kernel ignores ids at or above its own count. Names it in errors. */
 int cl_launch(pd_device *dev, cl_kernel k, size_t n, const char *what, pd_error *err);
 
 #endif

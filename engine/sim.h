@@ -10,7 +10,8 @@
  * A step (sim_step.c), all on the device:
  *   kick (dt/2) -> drift -> [walls moved] -> forces -> kick (dt/2)
  * where forces = boxes -> Morton codes -> radix sort -> LBVH nodes -> refit -> traversal
- * (count, scan, write: sorted keys) -> contact forces with history -> gather by particle.
+ * (count, scan, write: sorted keys) -> contact forces with history -> gather by particle
+ * (contacts as second body counted and listed, then summed in key order).
  * The host reads one int per step (the number of candidate pairs, to size the pair arrays) and
  * the divergence flag; everything else stays on the device until a stats row or frame is due.
  */
@@ -56,16 +57,24 @@ typedef struct sim {
     /* pairs: current and last step's (history) */
     sim_pairs cur, old;
     int npairs, n_old;
-    cl_mem force, tq1, tq2, info, ids, swapped, by_second, swapped_tmp, by_second_tmp;
-    size_t work_cap; /* capacity of the per-pair work arrays above */
+    cl_mem force, tq1, tq2, info, ids, second_list;
+    cl_mem second_count, second_off; /* per particle: contacts as second body, their offsets */
+    size_t work_cap;                 /* capacity of the per-pair work arrays above */
     /* overlap scratch, per contact work-item */
     cl_mem iscr, rscr;
     int ilen, rlen, pts_cap, nwork;
     /* kernels */
-    cl_kernel k_boxes, k_codes, k_leaves, k_nodes, k_refit, k_count, k_write, k_contact, k_body,
-        k_kick, k_drift;
+    cl_kernel k_boxes, k_codes, k_leaves, k_nodes, k_refit, k_count, k_write, k_contact,
+        k_second_count, k_second_fill, k_body, k_kick, k_drift;
     dsort sort;
+    /* profiling (bench/step): when set, every stage ends with clFinish and its wall time is
+     * added to stage_seconds[SIM_STAGE_*] */
+    int profile;
+    double bytes; /* device memory this run has allocated (buffers only), bytes */
+    double stage_seconds[5];
 } sim;
+
+enum { SIM_INTEGRATE, SIM_BVH, SIM_TRAVERSE, SIM_CONTACTS, SIM_GATHER, SIM_NSTAGES };
 
 /* sim_state.c: set-up, host <-> device copies, wall motion */
 int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err);

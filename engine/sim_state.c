@@ -18,6 +18,7 @@ static cl_mem mk(sim *m, size_t bytes, int *ok, cl_int *e)
     if (!*ok) return NULL;
     cl_mem b = clCreateBuffer(m->dev->ctx, CL_MEM_READ_WRITE, bytes ? bytes : 16, NULL, e);
     if (*e != CL_SUCCESS) *ok = 0;
+    m->bytes += (double)bytes;
     return b;
 }
 
@@ -376,6 +377,8 @@ static const char *const kernel_names[][2] = {
     {"broad_phase", "broad_count"},
     {"broad_phase", "broad_write"},
     {"contact", "contact_forces"},
+    {"forces", "second_count"},
+    {"forces", "second_fill"},
     {"forces", "body_forces"},
     {"integrate", "integrate_kick"},
     {"integrate", "integrate_drift"},
@@ -383,9 +386,10 @@ static const char *const kernel_names[][2] = {
 
 static cl_kernel *kernel_slot(sim *m, int i)
 {
-    cl_kernel *slots[] = {&m->k_boxes, &m->k_codes, &m->k_leaves, &m->k_nodes,
-                          &m->k_refit, &m->k_count, &m->k_write,  &m->k_contact,
-                          &m->k_body,  &m->k_kick,  &m->k_drift};
+    cl_kernel *slots[] = {&m->k_boxes,        &m->k_codes,       &m->k_leaves, &m->k_nodes,
+                          &m->k_refit,        &m->k_count,       &m->k_write,  &m->k_contact,
+                          &m->k_second_count, &m->k_second_fill, &m->k_body,   &m->k_kick,
+                          &m->k_drift};
     return slots[i];
 }
 
@@ -467,6 +471,8 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->count = mk(m, sizeof(int) * n, &ok, &e);
     m->offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->status = mk(m, sizeof(int) * 2, &ok, &e);
+    m->second_count = mk(m, sizeof(int) * n, &ok, &e);
+    m->second_off = mk(m, sizeof(int) * (n + 1), &ok, &e);
     if (!ok) {
         rc = CL_FAIL(err, "clCreateBuffer(particles)", e);
         goto fail;
@@ -505,24 +511,58 @@ static void release(cl_mem *b)
 void sim_destroy(sim *m)
 {
     if (!m) return;
-    cl_mem *bufs[] = {&m->x,         &m->q,           &m->v,
-                      &m->w,         &m->size,        &m->inv_m,
-                      &m->shape,     &m->material,    &m->L,
-                      &m->inv_i,     &m->f,           &m->t,
-                      &m->vert,      &m->tri,         &m->voff,
-                      &m->toff,      &m->vt_off,      &m->vt,
-                      &m->unit_vol,  &m->kind,        &m->radius_ratio,
-                      &m->params,    &m->pbox,        &m->wbox,
-                      &m->tbox,      &m->left,        &m->right,
-                      &m->parent,    &m->arrivals,    &m->codes,
-                      &m->idx,       &m->codes_tmp,   &m->idx_tmp,
-                      &m->count,     &m->offset,      &m->status,
-                      &m->cur.keys,  &m->cur.spring,  &m->cur.kt,
-                      &m->old.keys,  &m->old.spring,  &m->old.kt,
-                      &m->force,     &m->tq1,         &m->tq2,
-                      &m->info,      &m->ids,         &m->swapped,
-                      &m->by_second, &m->swapped_tmp, &m->by_second_tmp,
-                      &m->iscr,      &m->rscr};
+    cl_mem *bufs[] = {&m->x,
+                      &m->q,
+                      &m->v,
+                      &m->w,
+                      &m->size,
+                      &m->inv_m,
+                      &m->shape,
+                      &m->material,
+                      &m->L,
+                      &m->inv_i,
+                      &m->f,
+                      &m->t,
+                      &m->vert,
+                      &m->tri,
+                      &m->voff,
+                      &m->toff,
+                      &m->vt_off,
+                      &m->vt,
+                      &m->unit_vol,
+                      &m->kind,
+                      &m->radius_ratio,
+                      &m->params,
+                      &m->pbox,
+                      &m->wbox,
+                      &m->tbox,
+                      &m->left,
+                      &m->right,
+                      &m->parent,
+                      &m->arrivals,
+                      &m->codes,
+                      &m->idx,
+                      &m->codes_tmp,
+                      &m->idx_tmp,
+                      &m->count,
+                      &m->offset,
+                      &m->status,
+                      &m->cur.keys,
+                      &m->cur.spring,
+                      &m->cur.kt,
+                      &m->old.keys,
+                      &m->old.spring,
+                      &m->old.kt,
+                      &m->force,
+                      &m->tq1,
+                      &m->tq2,
+                      &m->info,
+                      &m->ids,
+                      &m->second_list,
+                      &m->second_count,
+                      &m->second_off,
+                      &m->iscr,
+                      &m->rscr};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++)
         release(bufs[i]);
     for (int i = 0; i < NKERNELS; i++)

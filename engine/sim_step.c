@@ -5,10 +5,28 @@
  */
 #include <limits.h>
 #include <string.h>
+#include <time.h>
 
 #include "sim.h"
 
 #define ARG(k, i, v) (clSetKernelArg(k, i, sizeof(v), &(v)))
+
+static double clock_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Profiling: ends a stage (waits for the device) and books its time since *t0. */
+static void stage_end(sim *m, int stage, double *t0)
+{
+    if (!m->profile) return;
+    clFinish(m->dev->queue);
+    double t = clock_now();
+    m->stage_seconds[stage] += t - *t0;
+    *t0 = t;
+}
 
 /* Sets a pd_real argument in the device's precision. */
 static cl_int arg_real(sim *m, cl_kernel k, int i, double v)
@@ -31,6 +49,7 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     cl_context ctx = m->dev->ctx;
     if (need > m->cur.cap || !m->cur.keys) {
         size_t cap = need + need / 2 + 1024;
+        m->bytes += (double)(cap - m->cur.cap) * (sizeof(cl_ulong) + 4 * m->rs);
         if (m->cur.keys) clReleaseMemObject(m->cur.keys);
         if (m->cur.spring) clReleaseMemObject(m->cur.spring);
         if (m->cur.kt) clReleaseMemObject(m->cur.kt);
@@ -46,10 +65,9 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     }
     if (need > m->work_cap || !m->force) {
         size_t cap = need + need / 2 + 1024;
-        cl_mem *b[] = {&m->force,   &m->tq1,       &m->tq2,         &m->info,         &m->ids,
-                       &m->swapped, &m->by_second, &m->swapped_tmp, &m->by_second_tmp};
-        size_t sz[] = {m->rs * 3,        m->rs * 3,   m->rs * 3,        m->rs * 2,  sizeof(int),
-                       sizeof(cl_ulong), sizeof(int), sizeof(cl_ulong), sizeof(int)};
+        cl_mem *b[] = {&m->force, &m->tq1, &m->tq2, &m->info, &m->ids, &m->second_list};
+        size_t sz[] = {m->rs * 3, m->rs * 3, m->rs * 3, m->rs * 2, sizeof(int), sizeof(int)};
+        m->bytes += (double)(cap - m->work_cap) * (11 * m->rs + 2 * sizeof(int));
         m->work_cap = 0;
         for (size_t i = 0; i < sizeof b / sizeof b[0]; i++) {
             if (*b[i]) clReleaseMemObject(*b[i]);
@@ -63,20 +81,15 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     return PD_OK;
 }
 
-static int bits_for(unsigned long v)
-{
-    int b = 0;
-    while (v >> b)
-        b++;
-    return b;
-}
-
 /* Broad phase: boxes, tree, traversal; leaves the step's sorted pair keys in m->cur.keys. */
-static int broad_phase(sim *m, pd_error *err)
+static int broad_phase(sim *m, double *t0, pd_error *err)
 {
     pd_device *dev = m->dev;
     int n = m->n, nw = m->nwall, rc;
     cl_int e = CL_SUCCESS;
+    /* the top 32 bits of the 63-bit Morton codes (10-11 bits per axis, 1/2048 of the scene
+     * box): four radix passes instead of eight; equal codes are ordered by index (Karras) */
+    int morton_drop = 31;
     e |= ARG(m->k_boxes, 0, m->x);
     e |= ARG(m->k_boxes, 1, m->size);
     e |= ARG(m->k_boxes, 2, m->shape);
@@ -95,6 +108,7 @@ static int broad_phase(sim *m, pd_error *err)
     }
     e |= ARG(m->k_codes, 8, m->codes);
     e |= ARG(m->k_codes, 9, m->idx);
+    e |= ARG(m->k_codes, 10, morton_drop);
     if (e != CL_SUCCESS) return arg_fail(err, "bvh_codes");
     if ((rc = cl_launch(dev, m->k_codes, (size_t)n, "bvh_codes", err)) != PD_OK) return rc;
     static const int morton_shifts[8] = {0, 8, 16, 24, 32, 40, 48, 56};
@@ -128,6 +142,7 @@ static int broad_phase(sim *m, pd_error *err)
         if ((rc = cl_launch(dev, m->k_refit, (size_t)n, "bvh_refit", err)) != PD_OK) return rc;
     }
 
+    stage_end(m, SIM_BVH, t0);
     e |= ARG(m->k_count, 0, m->tbox);
     e |= ARG(m->k_count, 1, m->left);
     e |= ARG(m->k_count, 2, m->right);
@@ -164,7 +179,9 @@ static int broad_phase(sim *m, pd_error *err)
     e |= ARG(m->k_write, 9, m->ids);
     e |= ARG(m->k_write, 10, m->cur.keys);
     if (e != CL_SUCCESS) return arg_fail(err, "broad_write");
-    return cl_launch(dev, m->k_write, (size_t)n, "broad_write", err);
+    rc = cl_launch(dev, m->k_write, (size_t)n, "broad_write", err);
+    stage_end(m, SIM_TRAVERSE, t0);
+    return rc;
 }
 
 /* Narrow phase and contact forces with history over the step's pairs. */
@@ -203,32 +220,40 @@ static int contacts(sim *m, pd_error *err)
     return cl_launch(m->dev, k, (size_t)nwork, "contact_forces", err);
 }
 
-/* Per-particle sums: contacts sorted by second body, then the gather kernel. */
+/* Per-particle sums: contacts as second body counted and listed, then the gather kernel. */
 static int gather(sim *m, pd_error *err)
 {
-    int rc, np = m->npairs;
-    if (np > 0) {
-        rc = dsort_swap_keys(&m->sort, m->cur.keys, np, m->swapped, m->by_second, err);
-        if (rc != PD_OK) return rc;
-        /* swapped keys: (second, first); first < n in the low word, second < n or a wall */
-        int shifts[8], ns = 0, lowbits = bits_for((unsigned long)m->n);
-        for (int s = 0; s < lowbits && ns < 4; s += 8)
-            shifts[ns++] = s;
-        for (int s = 0; s < lowbits && s < 24; s += 8)
-            shifts[ns++] = 32 + s;
-        if (m->nwall > 0 && lowbits <= 24) shifts[ns++] = 56;
-        rc = dsort_radix(&m->sort, &m->swapped, &m->by_second, &m->swapped_tmp, &m->by_second_tmp,
-                         np, shifts, ns, err);
-        if (rc != PD_OK) return rc;
-    }
+    int rc, np = m->npairs, n = m->n;
+    int zero = 0;
+    cl_int e = clEnqueueFillBuffer(m->dev->queue, m->second_count, &zero, sizeof zero, 0,
+                                   sizeof(int) * (size_t)n, 0, NULL, NULL);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueFillBuffer", e);
+    e |= ARG(m->k_second_count, 0, m->cur.keys);
+    e |= ARG(m->k_second_count, 1, np);
+    e |= ARG(m->k_second_count, 2, n);
+    e |= ARG(m->k_second_count, 3, m->second_count);
+    e |= ARG(m->k_second_fill, 0, m->cur.keys);
+    e |= ARG(m->k_second_fill, 1, np);
+    e |= ARG(m->k_second_fill, 2, n);
+    e |= ARG(m->k_second_fill, 3, m->second_off);
+    e |= ARG(m->k_second_fill, 4, m->second_count);
+    e |= ARG(m->k_second_fill, 5, m->second_list);
+    if (e != CL_SUCCESS) return arg_fail(err, "second_count/second_fill");
+    rc = cl_launch(m->dev, m->k_second_count, (size_t)np, "second_count", err);
+    if (rc == PD_OK) rc = dsort_scan(&m->sort, m->second_count, n, m->second_off, err);
+    if (rc != PD_OK) return rc;
+    /* the counts become the fill cursors */
+    e = clEnqueueFillBuffer(m->dev->queue, m->second_count, &zero, sizeof zero, 0,
+                            sizeof(int) * (size_t)n, 0, NULL, NULL);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueFillBuffer", e);
+    if ((rc = cl_launch(m->dev, m->k_second_fill, (size_t)np, "second_fill", err)) != PD_OK)
+        return rc;
     const pd_scenario *s = m->s;
     cl_kernel k = m->k_body;
-    cl_int e = CL_SUCCESS;
     int a = 0;
-    e |= ARG(k, a++, m->cur.keys);
-    e |= ARG(k, a++, m->by_second);
-    e |= ARG(k, a++, m->swapped);
-    e |= ARG(k, a++, np);
+    e |= ARG(k, a++, m->offset);
+    e |= ARG(k, a++, m->second_off);
+    e |= ARG(k, a++, m->second_list);
     e |= ARG(k, a++, m->force);
     e |= ARG(k, a++, m->tq1);
     e |= ARG(k, a++, m->tq2);
@@ -249,9 +274,12 @@ static int gather(sim *m, pd_error *err)
 
 int sim_forces(sim *m, pd_error *err)
 {
-    int rc = broad_phase(m, err);
+    double t0 = m->profile ? clock_now() : 0;
+    int rc = broad_phase(m, &t0, err);
     if (rc == PD_OK && m->npairs > 0) rc = contacts(m, err);
+    stage_end(m, SIM_CONTACTS, &t0);
     if (rc == PD_OK) rc = gather(m, err);
+    stage_end(m, SIM_GATHER, &t0);
     if (rc != PD_OK) return rc;
     /* this step's pairs become the next step's history */
     sim_pairs t = m->old;
@@ -280,6 +308,7 @@ int sim_step(sim *m, int *bad_particle, pd_error *err)
 {
     cl_kernel k = m->k_drift;
     cl_int e = CL_SUCCESS;
+    double t0 = m->profile ? clock_now() : 0;
     int rc = kick(m, err);
     if (rc != PD_OK) return rc;
     e |= ARG(k, 0, m->x);
@@ -295,8 +324,11 @@ int sim_step(sim *m, int *bad_particle, pd_error *err)
     if ((rc = cl_launch(m->dev, k, (size_t)m->n, "integrate_drift", err)) != PD_OK) return rc;
     if (m->walls_move && (rc = sim_walls_at(m, (double)(m->step + 1) * m->dt, err)) != PD_OK)
         return rc;
+    stage_end(m, SIM_INTEGRATE, &t0);
     if ((rc = sim_forces(m, err)) != PD_OK) return rc;
+    t0 = m->profile ? clock_now() : 0;
     if ((rc = kick(m, err)) != PD_OK) return rc;
+    stage_end(m, SIM_INTEGRATE, &t0);
     m->step++;
     *bad_particle = m->status_host[1] != INT_MAX ? m->status_host[1] : -1;
     return PD_OK;

@@ -6,16 +6,17 @@
 #include "pd_real.h"
 #include "bvh.h"
 
-/* Morton code of each box's centre in the scene box [lo, lo + 1/inv). */
+/* Morton code of each box's centre in the scene box [lo, lo + 1/inv), without its `drop` low
+ * bits (fewer bits to sort; Karras orders equal codes by index). */
 __kernel void bvh_codes(__global const pd_real *box, int n, pd_real lox, pd_real loy, pd_real loz,
                         pd_real invx, pd_real invy, pd_real invz, __global bvh_code *codes,
-                        __global int *index)
+                        __global int *index, int drop)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
     __global const pd_real *b = box + 6 * i;
     pd_v3 c = v3(PD_R(0.5) * (b[0] + b[3]), PD_R(0.5) * (b[1] + b[4]), PD_R(0.5) * (b[2] + b[5]));
-    codes[i] = bvh_morton(c, v3(lox, loy, loz), v3(invx, invy, invz));
+    codes[i] = bvh_morton(c, v3(lox, loy, loz), v3(invx, invy, invz)) >> drop;
     index[i] = i;
 }
 

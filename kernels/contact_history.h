@@ -9,8 +9,8 @@
  * sorted keys: no hashing, no atomics, the same answer on every device.
  *
  * Forces are summed per particle in a fixed order (its contacts as first body in key order, then
- * as second body in the order of the key with the bodies swapped), never with floating-point
- * atomics, so a run is bit-identical from run to run on one device (issue 3, stage 6).
+ * those as second body in key order), never with floating-point atomics, so a run is
+ * bit-identical from run to run on one device (issue 3, stage 6).
  */
 #ifndef PD_CONTACT_HISTORY_H
 #define PD_CONTACT_HISTORY_H
@@ -75,24 +75,35 @@ PD_FN void ch_carry(PD_GLOBAL const ch_key *old_keys, int n_old,
 }
 
 /*
- * Sum over particle p's contacts of the force and torque on p. keys[0..n) are the contacts sorted
- * by key; by_second[0..n) lists contact indices sorted by the swapped key (second body, first
- * body), with swapped[] those swapped keys. Contact c carries force[3c] acting on its second body
- * (the first body gets minus it) and torques tq_first[3c], tq_second[3c] about each body's centre.
+ * Sum over particle p's contacts of the force and torque on p. Its contacts as first body are
+ * first[p] .. first[p+1]-1 (the step's keys are sorted, so they are contiguous and in key
+ * order). Its contacts as second body are listed, in any order, in second_list[second_off[p] ..
+ * second_off[p+1]-1]; the list is sorted here (only p's gather touches it) so they are summed in
+ * key order too. Contact c carries force[3c] acting on its second body (the first body gets
+ * minus it) and torques tq_first[3c], tq_second[3c] about each body's centre.
  */
-PD_FN void ch_gather(unsigned p, PD_GLOBAL const ch_key *keys, PD_GLOBAL const int *by_second,
-                     PD_GLOBAL const ch_key *swapped, int n, PD_GLOBAL const pd_real *force,
+PD_FN void ch_gather(unsigned p, PD_GLOBAL const int *first, PD_GLOBAL const int *second_off,
+                     PD_GLOBAL int *second_list, PD_GLOBAL const pd_real *force,
                      PD_GLOBAL const pd_real *tq_first, PD_GLOBAL const pd_real *tq_second,
                      pd_v3 *f_out, pd_v3 *t_out)
 {
     pd_v3 f = v3(0, 0, 0), t = v3(0, 0, 0);
-    for (int c = ch_lower_bound(keys, n, ch_make(p, 0)); c < n && ch_first(keys[c]) == p; c++) {
+    for (int c = first[p]; c < first[p + 1]; c++) {
         f = v3_sub(f, v3_load(force, c));
         t = v3_add(t, v3_load(tq_first, c));
     }
-    for (int s = ch_lower_bound(swapped, n, ch_make(p, 0)); s < n && ch_first(swapped[s]) == p;
-         s++) {
-        int c = by_second[s];
+    PD_GLOBAL int *l = second_list + second_off[p];
+    int m = second_off[p + 1] - second_off[p];
+    for (int a = 1; a < m; a++) { /* insertion sort: a particle has tens of contacts */
+        int v = l[a], b = a - 1;
+        while (b >= 0 && l[b] > v) {
+            l[b + 1] = l[b];
+            b--;
+        }
+        l[b + 1] = v;
+    }
+    for (int s = 0; s < m; s++) {
+        int c = l[s];
         f = v3_add(f, v3_load(force, c));
         t = v3_add(t, v3_load(tq_second, c));
     }

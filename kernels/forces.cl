@@ -19,25 +19,47 @@ __kernel void hertz_volume_normal(__global const pd_real *in, int n, __global pd
     out[2 * g + 1] = kn;
 }
 
+/* Contacts per particle as second body (walls are never gathered); counts are exact whatever
+ * the order of the atomic increments. */
+__kernel void second_count(__global const ch_key *keys, int n, int nparticles,
+                           __global volatile int *count)
+{
+    int c = (int)get_global_id(0);
+    if (c >= n) return;
+    unsigned s = ch_second(keys[c]);
+    if (s < (unsigned)nparticles) atomic_inc(&count[s]);
+}
+
+/* Lists each particle's second-body contacts at its offset; the order within a particle's list
+ * depends on timing, so ch_gather sorts it before summing. cursor starts at zero. */
+__kernel void second_fill(__global const ch_key *keys, int n, int nparticles,
+                          __global const int *offset, __global volatile int *cursor,
+                          __global int *list)
+{
+    int c = (int)get_global_id(0);
+    if (c >= n) return;
+    unsigned s = ch_second(keys[c]);
+    if (s < (unsigned)nparticles) list[offset[s] + atomic_inc(&cursor[s])] = c;
+}
+
 /*
  * Total force and torque on each particle p: its contacts' sum in a fixed order (ch_gather), plus
  * gravity m g (seed 004 eq. 2.10) and Stokes drag in a uniform flow, F_d = 3 pi mu d (u_f - u)
  * (eqs. 1.2 and 2.9: m / tau_p with tau_p = rho d^2 / (18 mu); for a polyhedron d is its
  * volume-equivalent diameter). Drag exerts no torque in this model.
  */
-__kernel void body_forces(__global const ch_key *keys, __global const int *by_second,
-                          __global const ch_key *swapped, int ncontacts,
-                          __global const pd_real *force, __global const pd_real *tq_first,
-                          __global const pd_real *tq_second, int nparticles,
-                          __global const pd_real *inv_m, __global const pd_real *size,
-                          __global const pd_real *v, pd_real gx, pd_real gy, pd_real gz,
-                          pd_real drag_mu, pd_real ufx, pd_real ufy, pd_real ufz,
-                          __global pd_real *f_out, __global pd_real *t_out)
+__kernel void body_forces(__global const int *first, __global const int *second_off,
+                          __global int *second_list, __global const pd_real *force,
+                          __global const pd_real *tq_first, __global const pd_real *tq_second,
+                          int nparticles, __global const pd_real *inv_m,
+                          __global const pd_real *size, __global const pd_real *v, pd_real gx,
+                          pd_real gy, pd_real gz, pd_real drag_mu, pd_real ufx, pd_real ufy,
+                          pd_real ufz, __global pd_real *f_out, __global pd_real *t_out)
 {
     int p = (int)get_global_id(0);
     if (p >= nparticles) return;
     pd_v3 f, t;
-    ch_gather((unsigned)p, keys, by_second, swapped, ncontacts, force, tq_first, tq_second, &f, &t);
+    ch_gather((unsigned)p, first, second_off, second_list, force, tq_first, tq_second, &f, &t);
     f = v3_add(f, v3_scale(v3(gx, gy, gz), PD_R(1) / inv_m[p]));
     if (drag_mu > PD_R(0))
         f = v3_add(f, v3_scale(v3_sub(v3(ufx, ufy, ufz), v3_load(v, p)),

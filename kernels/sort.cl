@@ -1,6 +1,6 @@
 /*
  * sort.cl - prefix sums and a stable least-significant-digit radix sort of 64-bit keys with int
- * values, for the broad phase (Morton codes) and the force gather (contacts by second body).
+ * values, for the broad phase (Morton codes) and the counts of candidate pairs.
  *
  * Both work the same way: the input is cut into nwork contiguous chunks, one per work-item, each
  * processed in order. Scans: chunk sums, one work-item scans the sums, chunks add their base.
@@ -79,15 +79,4 @@ __kernel void radix_scatter(__global const ulong *key, __global const int *val, 
         key_out[p] = k;
         val_out[p] = val[i];
     }
-}
-
-/* Keys of the contacts with the bodies swapped (second, first) and their indices, to sort. */
-__kernel void swap_keys(__global const ulong *key, int n, __global ulong *swapped,
-                        __global int *index)
-{
-    int i = (int)get_global_id(0);
-    if (i >= n) return;
-    ulong k = key[i];
-    swapped[i] = (k << 32) | (k >> 32);
-    index[i] = i;
 }

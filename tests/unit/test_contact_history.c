@@ -56,17 +56,6 @@ TEST(history_follows_the_pair_not_the_slot)
     CHECK_NEAR(0, s[6] + s[7] + s[8] + kt[2], 0); /* a new contact starts unloaded */
 }
 
-/* Builds the swapped-key index of sorted keys (by_second, swapped). */
-typedef struct {
-    ch_key k;
-    int c;
-} swap_entry;
-static int swap_cmp(const void *a, const void *b)
-{
-    const swap_entry *x = a, *y = b;
-    return x->k < y->k ? -1 : x->k > y->k;
-}
-
 TEST(gather_equals_the_direct_sum_exactly)
 {
     enum { NP = 50, NC = 400 };
@@ -90,17 +79,20 @@ TEST(gather_equals_the_direct_sum_exactly)
         tqa[i] = (double)(int)(rnd64() % 21) - 10;
         tqb[i] = (double)(int)(rnd64() % 21) - 10;
     }
-    swap_entry sw[NC];
+    /* first-body segments from the sorted keys; second-body lists in reverse contact order, so
+     * the gather must sort them to sum in key order */
+    int first[NP + 1] = {0}, second_off[NP + 1] = {0}, second_list[NC], fill[NP] = {0};
     for (int c = 0; c < NC; c++) {
-        sw[c].k = ch_make(ch_second(keys[c]), ch_first(keys[c]));
-        sw[c].c = c;
+        first[ch_first(keys[c]) + 1]++;
+        second_off[ch_second(keys[c]) + 1]++;
     }
-    qsort(sw, NC, sizeof sw[0], swap_cmp);
-    int by_second[NC];
-    ch_key swapped[NC];
-    for (int s = 0; s < NC; s++) {
-        by_second[s] = sw[s].c;
-        swapped[s] = sw[s].k;
+    for (int p = 0; p < NP; p++) {
+        first[p + 1] += first[p];
+        second_off[p + 1] += second_off[p];
+    }
+    for (int c = NC - 1; c >= 0; c--) {
+        unsigned b = ch_second(keys[c]);
+        second_list[second_off[b] + fill[b]++] = c;
     }
     double direct_f[3 * NP] = {0}, direct_t[3 * NP] = {0};
     for (int c = 0; c < NC; c++) {
@@ -115,12 +107,17 @@ TEST(gather_equals_the_direct_sum_exactly)
     int exact = 1;
     for (unsigned p = 0; p < NP; p++) {
         pd_v3 f, t;
-        ch_gather(p, keys, by_second, swapped, NC, force, tqa, tqb, &f, &t);
+        ch_gather(p, first, second_off, second_list, force, tqa, tqb, &f, &t);
         exact &= f.x == direct_f[3 * p] && f.y == direct_f[3 * p + 1] &&
                  f.z == direct_f[3 * p + 2] && t.x == direct_t[3 * p] &&
                  t.y == direct_t[3 * p + 1] && t.z == direct_t[3 * p + 2];
     }
     CHECK(exact);
+    int sorted = 1;
+    for (int p = 0; p < NP; p++)
+        for (int k = second_off[p] + 1; k < second_off[p + 1]; k++)
+            sorted &= second_list[k - 1] < second_list[k];
+    CHECK(sorted);
 }
 
 int main(void)

@@ -1,0 +1,178 @@
+/*
+ * bench/step.c - the whole time step on a device: particle-steps per second, time per
+ * contact-step and time per stage, for a gravity packing of Schonhardt particles (thesis Table
+ * A.3 materials and time step) and for a bed of settled analytic spheres.
+ *
+ * Each case starts as a lattice just above a floor, falls and piles for --settle steps, then is
+ * timed for --steps steps twice: once free-running (the figures that count), once with a device
+ * barrier after every stage (the per-stage split; barriers add their own cost). Memory is what
+ * the run allocated on the device (buffers), per particle.
+ *
+ * usage: build/bench/step [--quick] [--sizes N,N,...] [--spheres N] [--settle S] [--steps S]
+ *                         [--device N] [--single]
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "sim.h"
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+/* A flat-ish lattice (the thesis's 169 x 169 x 35 aspect) of n particles of `shape`. */
+static void scenario(char *json, size_t len, long n, int spheres, int dbl)
+{
+    double size = 0.02,
+           cell = spheres ? size * 1.001 : 1.9 * size; /* Schonhardt: circumradius 0.945 d */
+    long nz = 1;
+    while (nz * nz * nz * 23 < n) /* (169/35)^2 = 23 */
+        nz++;
+    long nxy = 1;
+    while (nxy * nxy * nz < n)
+        nxy++;
+    double w = nxy * cell * 1.0001, h = nz * cell * 1.0001;
+    snprintf(json, len,
+             "{\"name\": \"bench\", \"precision\": \"%s\", \"allow_unstable_dt\": true,"
+             " \"time\": {\"dt\": 1e-5, \"duration\": 1, \"output_interval\": 1},"
+             " \"gravity\": [0, 0, -9.81],"
+             " \"materials\": {\"p\": {\"density\": 2600, \"youngs_modulus\": 2e9, "
+             "\"poisson_ratio\": 0.25, \"shear_modulus\": 1e9},"
+             " \"w\": {\"density\": 7800, \"youngs_modulus\": 1e9, \"poisson_ratio\": 0.25, "
+             "\"shear_modulus\": 1e9}},"
+             " \"interactions\": [{\"between\": [\"p\", \"p\"], \"friction\": 0.39, \"damping\": "
+             "0.453619}, {\"between\": [\"p\", \"w\"], \"friction\": 0.35, \"damping\": "
+             "0.382097}],"
+             " \"shapes\": {\"s\": %s},"
+             " \"particles\": [{\"shape\": \"s\", \"material\": \"p\", \"count\": %ld, \"size\": "
+             "%g, \"region\": {\"min\": [0, 0, 0.001], \"max\": [%.9g, %.9g, %.9g]}, "
+             "\"orientation\": \"random\", \"velocity\": [0, 0, -1]}],"
+             " \"walls\": [{\"name\": \"floor\", \"material\": \"w\", \"box\": {\"min\": [-1, -1, "
+             "-0.1], \"max\": [%.9g, %.9g, 0]}}]}",
+             dbl ? "double" : "single",
+             spheres ? "{\"sphere\": {}}" : "{\"builtin\": \"schonhardt\"}", n, size, w, w,
+             0.001 + h, w + 1, w + 1);
+}
+
+static long count_contacts(sim *m)
+{
+    long c = 0;
+    size_t np = (size_t)m->n_old;
+    double *info = malloc(sizeof(double) * 2 * (np + 1));
+    pd_error err = {0};
+    if (info && sim_read(m, m->info, 0, 2 * np, info, &err) == PD_OK)
+        for (size_t i = 0; i < np; i++)
+            c += info[2 * i] != 0;
+    free(info);
+    return c;
+}
+
+static int bench_case(pd_device *dev, long n, int spheres, int dbl, int settle, int steps)
+{
+    char json[4000];
+    scenario(json, sizeof json, n, spheres, dbl);
+    pd_scenario *s = NULL;
+    pd_diags d = {0, 0, NULL};
+    pd_error err = {0};
+    if (pd_scenario_parse(json, NULL, &s, &d, &err) != PD_OK) {
+        fprintf(stderr, "bench: scenario: %s %s\n", d.n ? d.items[0].path : "",
+                d.n ? d.items[0].msg : err.msg);
+        pd_diags_free(&d);
+        return 1;
+    }
+    sim *m = NULL;
+    int bad = -1, rc = sim_create(dev, s, &m, &err);
+    if (rc == PD_OK) rc = sim_forces(m, &err);
+    for (int i = 0; i < settle && rc == PD_OK; i++)
+        rc = sim_step(m, &bad, &err);
+    clFinish(dev->queue);
+    double t0 = now();
+    for (int i = 0; i < steps && rc == PD_OK; i++)
+        rc = sim_step(m, &bad, &err);
+    clFinish(dev->queue);
+    double t = now() - t0;
+    long contacts = rc == PD_OK ? count_contacts(m) : 0;
+    m->profile = 1;
+    for (int i = 0; i < steps && rc == PD_OK; i++)
+        rc = sim_step(m, &bad, &err);
+    if (rc != PD_OK || bad >= 0) {
+        fprintf(stderr, "bench: %s (bad particle %d)\n", err.msg, bad);
+        sim_destroy(m);
+        pd_scenario_destroy(s);
+        return 1;
+    }
+    double per_step = t / steps, total = 0;
+    for (int k = 0; k < SIM_NSTAGES; k++)
+        total += m->stage_seconds[k];
+    printf("%-10s %8ld %9.3g %10.3g %9ld %9d %10.3g %8.0f |", spheres ? "spheres" : "schonhardt", n,
+           1e3 * per_step, (double)n / per_step, contacts, m->n_old,
+           contacts ? 1e6 * per_step / contacts : 0, m->bytes / n);
+    for (int k = 0; k < SIM_NSTAGES; k++)
+        printf(" %5.1f", 100 * m->stage_seconds[k] / total);
+    printf("\n");
+    fflush(stdout);
+    sim_destroy(m);
+    pd_scenario_destroy(s);
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    long sizes[8] = {1000, 10000, 100000};
+    int nsizes = 3, settle = 2000, steps = 100, device = -1, dbl = 1;
+    long spheres = 50000;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--quick")) {
+            sizes[0] = 1000;
+            nsizes = 1;
+            spheres = 2000;
+            settle = 300;
+            steps = 30;
+        } else if (!strcmp(argv[i], "--sizes") && i + 1 < argc) {
+            nsizes = 0;
+            for (char *p = argv[++i]; *p && nsizes < 8;) {
+                sizes[nsizes++] = strtol(p, &p, 10);
+                if (*p == ',') p++;
+            }
+        } else if (!strcmp(argv[i], "--spheres") && i + 1 < argc) {
+            spheres = strtol(argv[++i], NULL, 10);
+        } else if (!strcmp(argv[i], "--settle") && i + 1 < argc) {
+            settle = atoi(argv[++i]);
+        } else if (!strcmp(argv[i], "--steps") && i + 1 < argc) {
+            steps = atoi(argv[++i]);
+        } else if (!strcmp(argv[i], "--device") && i + 1 < argc) {
+            device = atoi(argv[++i]);
+        } else if (!strcmp(argv[i], "--single")) {
+            dbl = 0;
+        } else {
+            fprintf(stderr,
+                    "usage: %s [--quick] [--sizes N,N] [--spheres N] [--settle S] "
+                    "[--steps S] [--device N] [--single]\n",
+                    argv[0]);
+            return 2;
+        }
+    }
+    if (steps < 1) steps = 1;
+    pd_device *dev = NULL;
+    pd_error err = {0};
+    if (pd_device_open(device, &dev, &err) != PD_OK) {
+        fprintf(stderr, "bench: %s\n", err.msg);
+        return 1;
+    }
+    if (dbl && !pd_device_has_fp64(dev)) dbl = 0;
+    printf("device: %s, %s precision, dt 1e-5 s, %d settling steps, %d timed\n",
+           pd_device_name(dev), dbl ? "double" : "single", settle, steps);
+    printf("%-10s %8s %9s %10s %9s %9s %10s %8s | %% of step: integ bvh   trav  contacts gather\n",
+           "case", "N", "ms/step", "p-steps/s", "contacts", "pairs", "us/c-step", "B/part");
+    int rc = 0;
+    for (int i = 0; i < nsizes; i++)
+        rc |= bench_case(dev, sizes[i], 0, dbl, settle, steps);
+    if (spheres > 0) rc |= bench_case(dev, spheres, 1, dbl, settle, steps);
+    pd_device_close(dev);
+    return rc;
+}
