@@ -1,0 +1,92 @@
+#!/bin/sh
+# test_run.sh - `polydem run` as users and scripts call it: the result file and its contract
+# (HDF5 paths, XDMF beside it), the summary line, and clear errors for bad input.
+# Prints "N passed, N failed".
+POLYDEM=${POLYDEM:-build/polydem}
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
+passed=0
+failed=0
+ok() { passed=$((passed + 1)); echo "ok   $1"; }
+bad() { failed=$((failed + 1)); echo "FAIL $1: $2"; }
+
+# expect_fail NAME EXIT MESSAGE-FRAGMENT -- command...
+expect_fail() {
+    name=$1 code=$2 frag=$3
+    shift 4
+    "$@" >"$tmp/out" 2>"$tmp/err"
+    rc=$?
+    if [ "$rc" -ne "$code" ]; then bad "$name" "exit $rc, expected $code ($(cat "$tmp/err"))"
+    elif ! grep -q -- "$frag" "$tmp/err"; then bad "$name" "stderr lacks '$frag': $(cat "$tmp/err")"
+    else ok "$name"; fi
+}
+
+# a ball dropped on a floor, 2000 steps
+cat >"$tmp/drop.json" <<'JSON'
+{"name": "drop", "time": {"dt": 1e-5, "duration": 0.02, "output_interval": 0.005,
+  "stats_interval": 0.001},
+ "gravity": [0, 0, -9.81],
+ "materials": {"m": {"density": 2500, "youngs_modulus": 1e7, "poisson_ratio": 0.25}},
+ "interactions": [{"between": ["m", "m"], "friction": 0.3, "damping": 0.2}],
+ "shapes": {"ball": {"sphere": {}}, "s": {"builtin": "schonhardt"}},
+ "particles": [{"shape": "ball", "material": "m",
+                "list": [{"position": [0, 0, 0.0101], "velocity": [0, 0, -0.5], "size": 0.02}]},
+               {"shape": "s", "material": "m",
+                "list": [{"position": [0.05, 0, 0.03], "velocity": [0, 0, -0.5], "size": 0.02}]}],
+ "walls": [{"name": "floor", "material": "m", "box": {"min": [-1, -1, -0.1], "max": [1, 1, 0]}}],
+ "output": {"fields": ["position", "orientation", "velocity", "angular_velocity"]}}
+JSON
+
+$POLYDEM run "$tmp/drop.json" -o "$tmp/drop.h5" >"$tmp/out" 2>"$tmp/err"
+rc=$?
+if [ "$rc" -eq 0 ] && grep -q "drop.h5: 2000 steps" "$tmp/out" && grep -q "kinetic energy" "$tmp/out"; then
+    ok run_summary
+else bad run_summary "exit $rc: $(cat "$tmp/out" "$tmp/err")"; fi
+if [ -f "$tmp/drop.h5" ] && [ -f "$tmp/drop.h5.xmf" ] && [ ! -e "$tmp/drop.h5.partial" ]; then
+    ok run_files
+else bad run_files "$(ls "$tmp")"; fi
+
+# the HDF5 contract (issue 3): paths and shapes other tools read
+h5ls -r "$tmp/drop.h5" >"$tmp/ls" 2>&1
+missing=""
+for p in "/frames/position Dataset {5/Inf, 2, 3}" "/frames/orientation Dataset {5/Inf, 2, 4}" \
+    "/frames/velocity Dataset {5/Inf, 2, 3}" "/frames/angular_velocity Dataset {5/Inf, 2, 3}" \
+    "/frames/time Dataset {5/Inf}" "/stats/kinetic_energy Dataset {21/Inf}" \
+    "/stats/contacts Dataset {21/Inf}" "/stats/broad_pairs Dataset {21/Inf}" \
+    "/stats/max_overlap_ratio Dataset {21/Inf}" "/stats/wall_force/floor Dataset {21/Inf, 3}" \
+    "/particles/mass Dataset {2}" "/particles/shape Dataset {2}" "/shapes/ball/vertices" \
+    "/shapes/s/triangles" "/walls/floor/vertices"; do
+    tr -s ' ' <"$tmp/ls" | grep -qF "$p" || missing="$missing [$p]"
+done
+if [ -z "$missing" ]; then ok result_contract_paths; else bad result_contract_paths "missing$missing"; fi
+if h5dump -a /format "$tmp/drop.h5" 2>/dev/null | grep -q '"polydem-result"'; then
+    ok result_format_attribute
+else bad result_format_attribute "$(h5dump -a /format "$tmp/drop.h5" 2>&1 | head -5)"; fi
+if xmllint --noout "$tmp/drop.h5.xmf" 2>"$tmp/x"; then ok xdmf_well_formed; else bad xdmf_well_formed "$(cat "$tmp/x")"; fi
+
+# while the ball is on the floor (it lands at once and bounces off within ~1 ms at 0.5 m/s),
+# the force it exerts on the floor, as a load cell in the floor reads it, points down
+h5dump -d /stats/wall_force/floor -s "1,0" -c "1,3" "$tmp/drop.h5" >"$tmp/wf" 2>&1
+fz=$(sed -n 's/^ *(1,0): *\([^,]*\), *\([^,]*\), *\([^ ,]*\).*/\3/p' "$tmp/wf")
+mass=$(h5dump -d /particles/mass "$tmp/drop.h5" | sed -n 's/^ *(0): *\([^,]*\), *\([^ ,]*\).*/\1 \2/p')
+if awk -v f="$fz" -v m="$mass" 'BEGIN { split(m, a, " "); w = (a[1] + a[2]) * 9.81; exit !(f < -w) }'; then
+    ok wall_force_points_down
+else bad wall_force_points_down "Fz '$fz' masses '$mass'"; fi
+
+$POLYDEM run "$tmp/drop.json" -o "$tmp/q.h5" --quiet >"$tmp/out" 2>&1
+if [ $? -eq 0 ] && [ ! -s "$tmp/out" ] && [ -f "$tmp/q.h5" ]; then ok run_quiet; else bad run_quiet "$(cat "$tmp/out")"; fi
+
+# bad input: a message naming the flag, file or field; 2 for usage, 1 for a scenario or run
+expect_fail no_output 2 "-o" -- $POLYDEM run "$tmp/drop.json"
+expect_fail no_scenario 2 "scenario file" -- $POLYDEM run -o "$tmp/x.h5"
+expect_fail unknown_option 2 "--fast" -- $POLYDEM run "$tmp/drop.json" -o "$tmp/x.h5" --fast
+expect_fail bad_device_number 2 "--device" -- $POLYDEM run "$tmp/drop.json" -o "$tmp/x.h5" --device x
+expect_fail missing_device 2 "device 99" -- $POLYDEM run "$tmp/drop.json" -o "$tmp/x.h5" --device 99
+expect_fail missing_scenario 1 "nope.json" -- $POLYDEM run "$tmp/nope.json" -o "$tmp/x.h5"
+sed 's/"dt": 1e-5/"dt": -1/' "$tmp/drop.json" >"$tmp/bad.json"
+expect_fail invalid_scenario 1 "/time/dt" -- $POLYDEM run "$tmp/bad.json" -o "$tmp/x.h5"
+expect_fail unwritable_output 1 "/nonexistent/dir/x.h5" -- $POLYDEM run "$tmp/drop.json" -o /nonexistent/dir/x.h5
+if [ ! -e "$tmp/x.h5" ] && [ ! -e "$tmp/x.h5.partial" ]; then ok no_result_after_errors; else bad no_result_after_errors "$(ls "$tmp")"; fi
+
+echo "$passed passed, $failed failed"
+[ "$failed" -eq 0 ]
