@@ -78,10 +78,14 @@ export async function api(path, { method = 'GET', body, headers = {}, timeout = 
   }
   if (!r.ok) {
     const e = data && data.error;
+    if (r.status === 401) {
+      const said = e && e.message ? ` (the server says: ${e.message})` : '';
+      throw new ApiError(401, (t ? 'the server refused the token in the Token field at the top right'
+        : 'the server wants a token: enter it in the Token field at the top right') + said);
+    }
     if (e && typeof e === 'object') {
       throw new ApiError(r.status, e.message || r.statusText, e.details || [], e.code || '');
     }
-    if (r.status === 401) throw new ApiError(401, 'the server wants a token: enter it at the top right');
     throw new ApiError(r.status, (text.trim() || r.statusText).slice(0, 300));
   }
   return data;
@@ -144,6 +148,7 @@ export function watchJob(job, onJob) {
     return { close: stop };
   }
   const onData = (ev) => {
+    window.polydemEvents = (window.polydemEvents || 0) + 1; // diagnostics: events received
     let data;
     try {
       data = JSON.parse(ev.data);

@@ -1,8 +1,9 @@
-"""test_dashboard.py URL SCENARIO - the dashboard in headless Chromium against a running polydemd:
+"""test_dashboard.py URL SCENARIO TOKEN - the dashboard in headless Chromium against a running polydemd:
 the submit page loads an example and sends a pasted scenario, the jobs page lists the job and its
 progress reaches 100%, the job page's plots and 3D viewer render (pixels other than the
 background in each canvas's screenshot), and an invalid scenario shows the field error next to
-its path. Prints ok/FAIL lines; the caller prints the summary. Exit status: failures (0 = all ok).
+its path. The daemon wants TOKEN: without it the jobs page says so; typed into the token field
+it is kept and used by every page. Prints ok/FAIL lines; the caller prints the summary. Exit status: failures (0 = all ok).
 """
 
 import json
@@ -15,6 +16,7 @@ from cdp import Browser, CdpError, count_near, count_non_background  # noqa: E40
 
 URL = sys.argv[1].rstrip("/")
 SCENARIO = open(sys.argv[2]).read()
+TOKEN = sys.argv[3]
 SHOTS = os.environ.get("SHOTS")  # a directory to keep screenshots in, for a look by eye
 failed = 0
 
@@ -63,7 +65,17 @@ def painted(page, selector, name, at_least):
 def main():
     t0 = time.monotonic()
     with Browser() as b:
-        page = b.new_page(URL + "/submit.html")
+        page = b.new_page(URL + "/index.html")
+
+        def token():
+            page.wait_for("(document.getElementById('message') || {}).textContent"
+                          " && document.getElementById('message').textContent.includes('token')", 10)
+            page.eval("(() => { const t = document.getElementById('token'); t.value = %s;"
+                      " t.dispatchEvent(new Event('change')); })()" % json.dumps(TOKEN))
+            page.wait_for("document.getElementById('message').className.includes('hidden')"
+                          " && !!document.querySelector('#jobs-body td.empty')", 10)
+        step("token_field", token)
+        page.goto(URL + "/submit.html")
         step("submit_page_loads", lambda: page.wait_for(
             "document.querySelectorAll('#example option').length > 1 && !!document.querySelector('header.top .brand')", 15))
 
@@ -158,6 +170,26 @@ def main():
             href = page.eval("document.getElementById('dl-result').href")
             assert href.endswith("/v1/jobs/%s/result" % job_id), href
         step("download_links", downloads)
+
+        # a longer job: live progress over SSE on the jobs page, then Cancel and Delete
+        longer = json.loads(SCENARIO)
+        longer["time"]["duration"] = 0.02
+        longer["name"] = "longer-collision"
+
+        def live():
+            page.goto(URL + "/index.html")
+            jid = page.eval("fetch('/v1/jobs', {method: 'POST', headers: {'Content-Type': 'application/json',"
+                            " Authorization: 'Bearer ' + localStorage.getItem('polydem.token')}, body: %s})"
+                            ".then(r => r.json()).then(j => j.id)" % json.dumps(json.dumps({"scenario": longer})))
+            r = "document.querySelector('tr[data-id=\"%s\"]')" % jid
+            page.wait_for("!!%s && %s.dataset.status === 'running' && (window.polydemEvents || 0) > 0"
+                          " && %s.querySelector('.bar-text').textContent !== '0%%'" % (r, r, r), 20)
+            page.eval("window.confirm = () => true")
+            page.eval(r + ".querySelector('button').click()")  # Cancel
+            page.wait_for(r + " && " + r + ".dataset.status === 'cancelled'", 10)
+            page.eval(r + ".querySelector('button').click()")  # Delete
+            page.wait_for("!" + r, 10)
+        step("live_progress_cancel_delete", live)
 
         errors = [m for m in page.console() if m.startswith("exception") or m.startswith("console.error")]
         if errors:

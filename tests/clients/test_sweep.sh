@@ -1,7 +1,8 @@
 #!/bin/sh
 # test_sweep.sh - clients/sweep.sh: bad input is refused with a message naming the option (no
-# daemon needed), then a 2x2 grid end to end against a real polydemd: the CSV's header, one row
-# per job with its parameters, every job succeeded and tagged with the sweep id.
+# daemon needed), then a 2x2 grid end to end against a real polydemd that wants a token: the
+# CSV's header, one row per job with its parameters, every job succeeded and tagged with the
+# sweep id; a missing token, a refused grid point and a mesh file.
 # Prints "N passed, N failed".
 # shellcheck source=tests/clients/lib.sh
 . tests/clients/lib.sh
@@ -32,7 +33,13 @@ expect_refusal missing_file 2 "cannot read scenario file" "$tmp/nothere.json" --
 expect_refusal bad_server_url 2 "--server 'localhost:1'" --server localhost:1 "$tmp/quick.json" --set '/seed=1'
 expect_refusal unreachable_server 3 "cannot reach $dead" --server "$dead" "$tmp/quick.json" --set '/seed=1,2'
 
+TOKEN="sweep-test-token-0123456789"
+echo "$TOKEN tester" >"$tmp/tokens"
+POLYDEMD_ARGS="--tokens $tmp/tokens"
 if start_daemon; then
+    export POLYDEM_TOKEN="$TOKEN" # sweep.sh's default for --token
+    expect_refusal token_needed 3 "refused the token (401)" --server "$URL" --token '' "$tmp/quick.json" \
+        --set '/seed=1'
     start=$(date +%s)
     timeout 150 bash "$SWEEP" --server "$URL" "$tmp/quick.json" \
         --set '/interactions/0/friction=0.2,0.4' --set '/materials/rock/youngs_modulus=1e7,2e7' \
@@ -57,7 +64,8 @@ if start_daemon; then
     check csv_peak_contacts_integers 0 "$bad_contacts"
     check csv_no_walls_no_force "" "$(tail -n +2 "$tmp/sweep.csv" 2>/dev/null | cut -d, -f7 | tr -d '\n')"
     sweep_id=$(sed -n 's/^sweep\.sh: \(sweep-[0-9a-f-]*\): submitting.*/\1/p' "$tmp/sweep.err")
-    n=$(curl -s --max-time 10 "$URL/v1/jobs?tag=$sweep_id" | jq '(.jobs // .) | length' 2>/dev/null)
+    n=$(curl -s --max-time 10 -H "Authorization: Bearer $TOKEN" "$URL/v1/jobs?tag=$sweep_id" |
+        jq '(.jobs // .) | length' 2>/dev/null)
     check jobs_tagged_with_sweep_id 4 "$n"
     if grep -q '4/4 succeeded' "$tmp/sweep.err"; then ok progress_on_stderr; else
         bad progress_on_stderr "no '4/4 succeeded' line: $(tail -n 2 "$tmp/sweep.err")"; fi
