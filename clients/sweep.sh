@@ -8,7 +8,8 @@
 # id, shows progress on stderr, waits for every job, and writes a CSV (--out FILE, default
 # standard output): job_id, one column per --set pointer, status, final_kinetic_energy_J,
 # peak_contacts, peak_wall_force_N. A job that fails or is refused gets its row and a message on
-# stderr; the rest go on.
+# stderr; the rest go on. Mesh files the scenario names by path are uploaded (POST /v1/meshes)
+# and named by their id.
 #
 # Exit status: 0 every job succeeded; 1 some job failed, was refused or did not finish in time
 # (the CSV is still written); 2 bad usage or input; 3 the server cannot be reached or answers
