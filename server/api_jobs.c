@@ -314,6 +314,28 @@ static void publish_job(http_req *r, const char *id)
     job_rec_free(&j);
 }
 
+typedef struct insert_ctx {
+    http_req *r;
+    job_rec job;
+    const char *scenario, *key, *hash;
+    char existing[24];
+    int rc;
+} insert_ctx;
+
+/* Inserts the job and announces it, before the worker may claim it (worker_enqueue). */
+static int insert_job(void *ctx)
+{
+    insert_ctx *c = ctx;
+    c->rc = job_store_insert(c->r->app->st, &c->job, c->scenario, c->key, c->hash, c->existing);
+    if (c->rc != JS_OK) return -1;
+    json_t *o = job_json(&c->job);
+    char *t = o ? job_json_dump(o) : NULL;
+    if (t) sse_publish(c->r->app->hub, c->job.id, c->job.owner, "status", t, 0);
+    free(t);
+    json_decref(o);
+    return 0;
+}
+
 static int valid_key(const char *k)
 {
     size_t n = strlen(k);
@@ -353,34 +375,33 @@ enum MHD_Result api_jobs_create(http_req *r)
     enum MHD_Result ret;
     if (parse_submission(r, &sub, &ret)) return ret;
 
-    job_rec j = {0};
+    insert_ctx c = {
+        .r = r, .scenario = sub.scenario_text, .key = key, .hash = hash, .rc = JS_ERROR};
     char *tags = json_dumps(sub.tags, JSON_COMPACT);
-    if (util_random_hex(j.id, 8) != 0 || !tags) {
+    if (util_random_hex(c.job.id, 8) != 0 || !tags) {
         free(tags);
         submission_free(&sub);
         return http_error(r, 500, "internal", "cannot make a job id");
     }
-    snprintf(j.status, sizeof j.status, "queued");
-    j.owner = (char *)r->owner;
-    j.name = (char *)pd_scenario_name(sub.s);
-    j.tags = tags;
-    j.priority = sub.priority;
-    util_now_iso(j.created_at);
-    int rc = job_store_insert(a->st, &j, sub.scenario_text, key, hash, existing);
+    snprintf(c.job.status, sizeof c.job.status, "queued");
+    c.job.owner = (char *)r->owner;
+    c.job.name = (char *)pd_scenario_name(sub.s);
+    c.job.tags = tags;
+    c.job.priority = sub.priority;
+    util_now_iso(c.job.created_at);
+    worker_enqueue(a->w, insert_job, &c);
     free(tags);
-    if (rc == JS_OK)
-        fprintf(stderr, "polydemd: job %s (%s) queued: %ld particles, %ld steps\n", j.id,
+    if (c.rc == JS_OK)
+        fprintf(stderr, "polydemd: job %s (%s) queued: %ld particles, %ld steps\n", c.job.id,
                 pd_scenario_name(sub.s), sub.sum.particles, sub.sum.steps);
     submission_free(&sub);
-    if (rc == JS_EXISTS) return send_job(r, 200, existing, 1);
-    if (rc == JS_CONFLICT)
+    if (c.rc == JS_EXISTS) return send_job(r, 200, c.existing, 1);
+    if (c.rc == JS_CONFLICT)
         return http_error(r, 422, "idempotency_key_reused",
                           "Idempotency-Key '%.100s' was used for another request body (job %s)",
-                          key, existing);
-    if (rc != JS_OK) return db_error(r);
-    worker_wake(a->w);
-    publish_job(r, j.id);
-    return send_job(r, 201, j.id, 1);
+                          key, c.existing);
+    if (c.rc != JS_OK) return db_error(r);
+    return send_job(r, 201, c.job.id, 1);
 }
 
 enum MHD_Result api_jobs_list(http_req *r)

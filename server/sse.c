@@ -212,37 +212,20 @@ struct MHD_Response *sse_open(sse_hub *h, struct MHD_Connection *c, const char *
         stream_free(s);
         return NULL;
     }
+    /* The snapshot is taken with the hub locked: every event published before it is in it (a
+     * producer records its change, then publishes), every later one follows it. */
+    char *snap = NULL;
+    int final = 0, ok;
+    struct MHD_Response *r = NULL;
     pthread_mutex_lock(&h->mu);
     s->next = h->streams;
     h->streams = s;
     h->count++;
-    int closing = h->closing;
+    ok = snapshot(ctx, &snap, &final) == 0 && stream_append(s, snap, strlen(snap)) == 0;
+    if (final || h->closing) s->ended = 1;
     pthread_mutex_unlock(&h->mu);
-
-    char *snap = NULL;
-    int final = 0;
-    struct MHD_Response *r = NULL;
-    if (snapshot(ctx, &snap, &final) == 0) {
-        pthread_mutex_lock(&s->mu);
-        /* the snapshot goes before whatever was published since the stream was registered */
-        size_t sl = strlen(snap);
-        int ok = stream_append(s, snap, sl) == 0;
-        if (ok && s->len > sl) {
-            char *tmp = malloc(s->len);
-            ok = tmp != NULL;
-            if (ok) {
-                memcpy(tmp, s->buf + s->len - sl, sl);
-                memcpy(tmp + sl, s->buf, s->len - sl);
-                memcpy(s->buf, tmp, s->len);
-                free(tmp);
-            }
-        }
-        if (final || closing) s->ended = 1;
-        pthread_mutex_unlock(&s->mu);
-        if (ok)
-            r = MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 16384, stream_read, s,
-                                                  stream_done);
-    }
+    if (ok)
+        r = MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, 16384, stream_read, s, stream_done);
     free(snap);
     if (!r) {
         stream_done(s);

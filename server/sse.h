@@ -35,8 +35,9 @@ typedef int (*sse_snapshot_fn)(void *ctx, char **text, int *final);
 
 /*
  * A response streaming job_id's events (job_id NULL: every job of owner), starting with the
- * snapshot. The snapshot is taken after the stream is registered, so no event is lost between
- * the two. NULL when out of memory or when snapshot fails.
+ * snapshot. The snapshot is taken as the stream is registered, with publishing held off, so no
+ * event is lost or sent out of order between the two. NULL when out of memory or when snapshot
+ * fails.
  */
 struct MHD_Response *sse_open(sse_hub *h, struct MHD_Connection *c, const char *job_id,
                               const char *owner, sse_snapshot_fn snapshot, void *ctx);

@@ -333,12 +333,16 @@ int worker_start(const config *cfg, job_store *st, sse_hub *hub, worker **out, c
     return 0;
 }
 
-void worker_wake(worker *w)
+int worker_enqueue(worker *w, int (*insert)(void *ctx), void *ctx)
 {
-    pthread_mutex_lock(&w->mu);
-    w->pending = 1;
-    pthread_cond_broadcast(&w->cv);
+    pthread_mutex_lock(&w->mu); /* the worker claims jobs with this held */
+    int rc = insert(ctx);
+    if (rc == 0) {
+        w->pending = 1;
+        pthread_cond_broadcast(&w->cv);
+    }
     pthread_mutex_unlock(&w->mu);
+    return rc;
 }
 
 int worker_cancel(worker *w, const char *id)

@@ -29,8 +29,12 @@ enum { DEV_STARTING, DEV_READY, DEV_FAILED, DEV_UNAVAILABLE };
 int worker_start(const config *cfg, job_store *st, sse_hub *hub, worker **out, char *msg,
                  size_t msglen);
 
-/* A job was queued: look for work. */
-void worker_wake(worker *w);
+/*
+ * Queues a job: runs insert(ctx) (which inserts the job and publishes its "queued" event) with the
+ * queue locked, so that the worker cannot claim the job before that event has gone out, then
+ * wakes the worker when insert returned 0. Returns insert's result.
+ */
+int worker_enqueue(worker *w, int (*insert)(void *ctx), void *ctx);
 
 /* Stops job id if it is the one running (its status becomes cancelled); 1 if it was running. */
 int worker_cancel(worker *w, const char *id);

@@ -140,6 +140,20 @@ check sse_of_ended_job_closes "200 text/event-stream" "$code $(header Content-Ty
 code=$(req GET /v1/jobs/0123456789abcdef/events)
 check sse_unknown_job_404 404 "$code"
 
+# ---- keep-alive comments (every second here) reach a waiting client; a departed client's
+#      stream is noticed and freed
+curl -s -N --max-time 1.6 "$URL/v1/jobs/$id/events" >"$tmp/ka.txt" 2>&1
+check sse_keepalive true "$(grep -q '^: keepalive$' "$tmp/ka.txt" && echo true)"
+i=0
+while [ $i -lt 50 ]; do
+    req GET /metrics >/dev/null
+    grep -q '^polydem_sse_streams 0$' "$tmp/body" && break
+    sleep 0.1
+    i=$((i + 1))
+done
+check sse_departed_freed "polydem_sse_streams 0" "$(grep '^polydem_sse_streams ' "$tmp/body")"
+echo "   (freed after $i tenths of a second)"
+
 # ---- cancel and delete
 code=$(req POST "/v1/jobs/$tagged/cancel")
 check cancel_twice_409 "409 job_finished" "$code $(jstr code)"

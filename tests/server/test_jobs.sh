@@ -118,6 +118,9 @@ check frame_out_of_range_404 "404 frame_not_found" "$code $(jstr code)"
 code=$(req GET "/v1/jobs/$id/shapes")
 check shapes "200 r,ball [0, 1]" "$code $(jget "$tmp/body" '",".join(s["name"] for s in d["shapes"])') $(jget "$tmp/body" 'd["particles"]["shape"]')"
 
+code=$(req GET '/v1/device?selftest=1')
+check selftest_on_request "200 passed" "$code $(jget "$tmp/body" 'd["selftest"]["status"]')"
+
 code=$(req GET /metrics)
 check metrics_succeeded 'polydem_jobs{status="succeeded"} 1' "$(grep '^polydem_jobs{status="succeeded"}' "$tmp/body")"
 

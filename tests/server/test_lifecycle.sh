@@ -36,6 +36,10 @@ start_daemon "$data" --no-selftest --config "$tmp/fast.conf" || { summary; exit 
 # ---- cancel a running job while a client follows its events
 l1=$(submit tests/server/long_job.json)
 if wait_progress "$l1"; then ok long_job_runs; else bad long_job_runs "$(cat "$tmp/wp.json")"; fi
+code=$(req GET "/v1/jobs/$l1/stats")
+check live_stats_while_running "200 true" "$code $(jget "$tmp/body" 'str(d["partial"] and len(d["time"]) >= 1 and len(d["time"]) == len(d["kinetic_energy"])).lower()')"
+code=$(req GET "/v1/jobs/$l1/frames/0")
+check no_frames_while_running "409 result_not_ready" "$code $(jstr code)"
 python3 tests/server/sse.py "$URL/v1/jobs/$l1/events" 60 >"$tmp/l1.sse" 2>&1 &
 sse_pid=$!
 sleep 0.5
