@@ -478,8 +478,16 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
         goto fail;
     }
     /* the contact stage's scratch: one overlap per work-item at a time */
-    m->nwork = dev->gpu ? 256 * dev->compute_units : 16 * dev->compute_units;
     if ((rc = upload_params(m, err)) != PD_OK || (rc = upload_shapes(m, err)) != PD_OK) goto fail;
+    /* Contact work-items: enough work-groups of 64 (cl_launch) to fill every compute unit
+     * several times over, within a scratch budget (an overlap of 1280-triangle shapes needs
+     * ~250 KB of scratch per work-item). */
+    double per_item = sizeof(int) * (double)m->ilen + (double)rs * m->rlen;
+    double budget = dev->gpu ? 1024.0 * 1048576 : 128.0 * 1048576;
+    long nwork = 256L * dev->compute_units;
+    if (nwork * per_item > budget) nwork = (long)(budget / per_item);
+    nwork = nwork / 64 * 64;
+    m->nwork = nwork < 64 ? 64 : (int)nwork;
     m->iscr = mk(m, sizeof(int) * (size_t)m->nwork * (size_t)m->ilen, &ok, &e);
     m->rscr = mk(m, rs * (size_t)m->nwork * (size_t)m->rlen, &ok, &e);
     if (!ok) {
