@@ -460,6 +460,9 @@ static void on_log(void *cls, const char *fmt, va_list ap)
     size_t n = strlen(line);
     while (n && line[n - 1] == '\n')
         line[--n] = 0;
+    /* a client that left (an event stream closed by its browser tab) is no fault to report */
+    if (strstr(line, "closed by remote peer") || strstr(line, "no longer available for sending"))
+        return;
     fprintf(stderr, "polydemd: http: %s\n", line);
 }
 
