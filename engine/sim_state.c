@@ -470,6 +470,7 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->idx_tmp = mk(m, sizeof(int) * n, &ok, &e);
     m->count = mk(m, sizeof(int) * n, &ok, &e);
     m->offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
+    m->old_offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->status = mk(m, sizeof(int) * 2, &ok, &e);
     m->second_count = mk(m, sizeof(int) * n, &ok, &e);
     m->second_off = mk(m, sizeof(int) * (n + 1), &ok, &e);
@@ -495,6 +496,13 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
         goto fail;
     }
     if ((rc = upload_bodies(m, err)) != PD_OK) goto fail;
+    int zero = 0; /* no history before the first step: every particle's old segment is empty */
+    e = clEnqueueFillBuffer(dev->queue, m->old_offset, &zero, sizeof zero, 0, sizeof(int) * (n + 1),
+                            0, NULL, NULL);
+    if (e != CL_SUCCESS) {
+        rc = CL_FAIL(err, "clEnqueueFillBuffer(offsets)", e);
+        goto fail;
+    }
     cl_int status0[2] = {0, 0x7fffffff}; /* INT_MAX: no particle found diverging */
     e = clEnqueueWriteBuffer(dev->queue, m->status, CL_TRUE, 0, sizeof status0, status0, 0, NULL,
                              NULL);
@@ -554,6 +562,7 @@ void sim_destroy(sim *m)
                       &m->idx_tmp,
                       &m->count,
                       &m->offset,
+                      &m->old_offset,
                       &m->status,
                       &m->cur.keys,
                       &m->cur.spring,

@@ -196,7 +196,7 @@ static int contacts(sim *m, pd_error *err)
     cl_mem os = m->old.spring ? m->old.spring : m->cur.spring;
     cl_mem okt = m->old.kt ? m->old.kt : m->cur.kt;
     e |= ARG(k, a++, ok);
-    e |= ARG(k, a++, m->n_old);
+    e |= ARG(k, a++, m->old_offset);
     e |= ARG(k, a++, os);
     e |= ARG(k, a++, okt);
     cl_mem body[] = {m->x,      m->q,        m->v,        m->w,    m->size,  m->inv_m,
@@ -286,6 +286,9 @@ int sim_forces(sim *m, pd_error *err)
     m->old = m->cur;
     m->cur = t;
     m->n_old = m->npairs;
+    cl_mem o = m->old_offset;
+    m->old_offset = m->offset;
+    m->offset = o;
     return PD_OK;
 }
 

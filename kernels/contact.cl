@@ -5,24 +5,27 @@
  * nwork work-items stride over the pairs, each with its own overlap scratch (ilen ints, rlen
  * reals), so scratch memory follows the device's parallelism, not the number of pairs. Each pair
  * finds its tangential history by binary search in last step's sorted keys (contact_history.h).
+ * The search is confined to the pair's first body's segment of last step's keys (old_offset).
  * Per pair out: force on the second body (3), torques about each body's centre (3 + 3), the new
  * tangential spring (3) and stiffness (1), and info (2): touching flag and depth / size.
  */
 #include "pd_real.h"
 #include "contact_pair.h"
 
-__kernel void contact_forces(
-    __global const ch_key *keys, int npairs, __global const ch_key *old_keys, int n_old,
-    __global const pd_real *old_spring, __global const pd_real *old_kt, __global const pd_real *x,
-    __global const pd_real *q, __global const pd_real *v, __global const pd_real *w,
-    __global const pd_real *size, __global const pd_real *inv_m, __global const int *shape,
-    __global const int *material, __global const pd_real *vert, __global const int *tri,
-    __global const int *voff, __global const int *toff, __global const int *vt_off,
-    __global const int *vt, __global const pd_real *unit_vol, __global const int *kind,
-    __global const pd_real *params, int nmat, int nparticles, pd_real dt, __global int *iscr,
-    __global pd_real *rscr, int ilen, int rlen, int pts_cap, int nwork, __global pd_real *force,
-    __global pd_real *tq_first, __global pd_real *tq_second, __global pd_real *spring,
-    __global pd_real *kt, __global pd_real *info)
+__kernel void
+contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *old_keys,
+               __global const int *old_offset, __global const pd_real *old_spring,
+               __global const pd_real *old_kt, __global const pd_real *x, __global const pd_real *q,
+               __global const pd_real *v, __global const pd_real *w, __global const pd_real *size,
+               __global const pd_real *inv_m, __global const int *shape,
+               __global const int *material, __global const pd_real *vert, __global const int *tri,
+               __global const int *voff, __global const int *toff, __global const int *vt_off,
+               __global const int *vt, __global const pd_real *unit_vol, __global const int *kind,
+               __global const pd_real *params, int nmat, int nparticles, pd_real dt,
+               __global int *iscr, __global pd_real *rscr, int ilen, int rlen, int pts_cap,
+               int nwork, __global pd_real *force, __global pd_real *tq_first,
+               __global pd_real *tq_second, __global pd_real *spring, __global pd_real *kt,
+               __global pd_real *info)
 {
     int g = (int)get_global_id(0);
     if (g >= nwork) return;
@@ -51,7 +54,10 @@ __kernel void contact_forces(
     __global pd_real *rs = rscr + (size_t)g * (size_t)rlen;
     for (int c = g; c < npairs; c += nwork) {
         ch_key k = keys[c];
-        int j = ch_find(old_keys, n_old, k);
+        /* last step's pairs of the same first body: a few entries to search, not all */
+        int lo = old_offset[ch_first(k)],
+            j = ch_find(old_keys + lo, old_offset[ch_first(k) + 1] - lo, k);
+        j = j >= 0 ? lo + j : -1;
         pd_v3 s0 = j >= 0 ? v3_load(old_spring, j) : v3(0, 0, 0);
         pd_real kt0 = j >= 0 ? old_kt[j] : PD_R(0);
         cp_result r;
