@@ -53,6 +53,7 @@ typedef struct sim {
     /* broad phase */
     cl_mem pbox, wbox, tbox, left, right, parent, arrivals, codes, idx, codes_tmp, idx_tmp;
     cl_mem count, offset, status;
+    cl_mem cand; /* broad phase: the first 16 partners of each particle, found while counting */
     cl_mem old_offset;     /* last step's offsets: where each particle's pairs begin in old.keys */
     cl_int status_host[2]; /* [1]: lowest particle found not finite, INT_MAX when none */
     /* pairs: current and last step's (history) */

@@ -471,6 +471,7 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->count = mk(m, sizeof(int) * n, &ok, &e);
     m->offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->old_offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
+    m->cand = mk(m, sizeof(int) * 16 * n, &ok, &e);
     m->status = mk(m, sizeof(int) * 2, &ok, &e);
     m->second_count = mk(m, sizeof(int) * n, &ok, &e);
     m->second_off = mk(m, sizeof(int) * (n + 1), &ok, &e);

@@ -152,6 +152,7 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     e |= ARG(m->k_count, 6, m->wbox);
     e |= ARG(m->k_count, 7, nw);
     e |= ARG(m->k_count, 8, m->count);
+    e |= ARG(m->k_count, 9, m->cand);
     if (e != CL_SUCCESS) return arg_fail(err, "broad_count");
     if ((rc = cl_launch(dev, m->k_count, (size_t)n, "broad_count", err)) != PD_OK) return rc;
     if ((rc = dsort_scan(&m->sort, m->count, n, m->offset, err)) != PD_OK) return rc;
@@ -176,8 +177,9 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     e |= ARG(m->k_write, 6, m->wbox);
     e |= ARG(m->k_write, 7, nw);
     e |= ARG(m->k_write, 8, m->offset);
-    e |= ARG(m->k_write, 9, m->ids);
-    e |= ARG(m->k_write, 10, m->cur.keys);
+    e |= ARG(m->k_write, 9, m->cand);
+    e |= ARG(m->k_write, 10, m->ids);
+    e |= ARG(m->k_write, 11, m->cur.keys);
     if (e != CL_SUCCESS) return arg_fail(err, "broad_write");
     rc = cl_launch(dev, m->k_write, (size_t)n, "broad_write", err);
     stage_end(m, SIM_TRAVERSE, t0);

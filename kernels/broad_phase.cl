@@ -52,18 +52,24 @@ PD_FN int walls_meeting(__global const pd_real *wbox, int nwall, const pd_real *
     return m;
 }
 
-/* Number of candidate pairs of particle i (partners above i, then walls). */
+/*
+ * Number of candidate pairs of particle i (partners above i, then walls). The first BROAD_CAP
+ * partners are kept in cand[i * BROAD_CAP ..], so broad_write traverses again only for particles
+ * with more.
+ */
+#define BROAD_CAP 16
 __kernel void broad_count(__global const pd_real *box, __global const int *left,
                           __global const int *right, __global const int *idx, int n,
                           __global const pd_real *pbox, __global const pd_real *wbox, int nwall,
-                          __global int *count)
+                          __global int *count, __global int *cand)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
     pd_real q[6];
     for (int c = 0; c < 6; c++)
         q[c] = pbox[6 * i + c];
-    int m = bvh_query_after(box, left, right, n, q, idx, i, 0, 0);
+    int m =
+        bvh_query_after(box, left, right, n, q, idx, i, cand + (size_t)i * BROAD_CAP, BROAD_CAP);
     count[i] = m + walls_meeting(wbox, nwall, q, 0, (unsigned)i);
 }
 
@@ -75,7 +81,8 @@ __kernel void broad_count(__global const pd_real *box, __global const int *left,
 __kernel void broad_write(__global const pd_real *box, __global const int *left,
                           __global const int *right, __global const int *idx, int n,
                           __global const pd_real *pbox, __global const pd_real *wbox, int nwall,
-                          __global const int *offset, __global int *scratch, __global ch_key *keys)
+                          __global const int *offset, __global const int *cand,
+                          __global int *scratch, __global ch_key *keys)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
@@ -84,8 +91,16 @@ __kernel void broad_write(__global const pd_real *box, __global const int *left,
         q[c] = pbox[6 * i + c];
     int off = offset[i], cap = offset[i + 1] - off;
     __global int *ids = scratch + off;
-    int m = bvh_query_after(box, left, right, n, q, idx, i, ids, cap);
-    if (m > cap) m = cap; /* cannot happen: the same query counted them */
+    int m = 0;
+    for (int w = 0; w < nwall; w++) /* the count included walls; partners are the rest */
+        m += bvh_boxes_meet(wbox + 6 * w, q);
+    m = cap - m;
+    if (m <= BROAD_CAP) {
+        for (int a = 0; a < m; a++)
+            ids[a] = cand[(size_t)i * BROAD_CAP + a];
+    } else {
+        m = bvh_query_after(box, left, right, n, q, idx, i, ids, m);
+    }
     for (int a = 1; a < m; a++) {
         int v = ids[a], b = a - 1;
         while (b >= 0 && ids[b] > v) {
