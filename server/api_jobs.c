@@ -35,9 +35,11 @@ static void submission_free(submission *sub)
 
 static void detail(json_t *details, const char *prefix, const char *path, const char *msg)
 {
-    char full[512];
+    char full[512], m[512];
     snprintf(full, sizeof full, "%s%s", prefix, path);
-    json_array_append_new(details, json_pack("{s:s, s:s}", "path", full, "message", msg));
+    snprintf(m, sizeof m, "%s", msg);
+    json_array_append_new(
+        details, json_pack("{s:s, s:s}", "path", util_utf8_fix(full), "message", util_utf8_fix(m)));
 }
 
 static int valid_tag(const char *t)
@@ -256,11 +258,13 @@ static int parse_submission(http_req *r, submission *sub, enum MHD_Result *ret)
 
 static json_t *summary_json(const pd_scenario_summary *m)
 {
-    return json_pack("{s:I, s:i, s:i, s:i, s:f, s:f, s:I, s:f, s:f, s:f, s:f}", "particles",
+    return json_pack("{s:I, s:i, s:i, s:i, s:o, s:o, s:I, s:o, s:o, s:o, s:o}", "particles",
                      (json_int_t)m->particles, "shapes", m->shapes, "materials", m->materials,
-                     "walls", m->walls, "dt", m->dt, "duration", m->duration, "steps",
-                     (json_int_t)m->steps, "dt_rayleigh", m->dt_rayleigh, "dt_hertz", m->dt_hertz,
-                     "dt_stable", m->dt_stable, "memory_bytes", m->memory_bytes);
+                     "walls", m->walls, "dt", job_json_real(m->dt), "duration",
+                     job_json_real(m->duration), "steps", (json_int_t)m->steps, "dt_rayleigh",
+                     job_json_real(m->dt_rayleigh), "dt_hertz", job_json_real(m->dt_hertz),
+                     "dt_stable", job_json_real(m->dt_stable), "memory_bytes",
+                     job_json_real(m->memory_bytes));
 }
 
 enum MHD_Result api_validate(http_req *r)

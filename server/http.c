@@ -2,6 +2,7 @@
 #include "http.h"
 
 #include "api.h"
+#include "util.h"
 
 #include <arpa/inet.h>
 #include <errno.h>
@@ -78,7 +79,9 @@ enum MHD_Result http_json(http_req *r, unsigned status, json_t *body)
 enum MHD_Result http_error_details(http_req *r, unsigned status, const char *code,
                                    const char *message, json_t *details)
 {
-    json_t *e = json_pack("{s:s, s:s}", "code", code, "message", message);
+    char msg[1200];
+    snprintf(msg, sizeof msg, "%s", message);
+    json_t *e = json_pack("{s:s, s:s}", "code", code, "message", util_utf8_fix(msg));
     if (e && details)
         json_object_set_new(e, "details", details);
     else
@@ -460,8 +463,10 @@ static void on_log(void *cls, const char *fmt, va_list ap)
     size_t n = strlen(line);
     while (n && line[n - 1] == '\n')
         line[--n] = 0;
-    /* a client that left (an event stream closed by its browser tab) is no fault to report */
-    if (strstr(line, "closed by remote peer") || strstr(line, "no longer available for sending"))
+    /* a client that left (an event stream closed by its browser tab) or sent no HTTP is no
+     * fault of ours to report */
+    if (strstr(line, "closed by remote peer") || strstr(line, "no longer available for sending") ||
+        strstr(line, "Request malformed"))
         return;
     fprintf(stderr, "polydemd: http: %s\n", line);
 }

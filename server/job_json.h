@@ -15,6 +15,9 @@ json_t *job_json(const job_rec *j);
  * unknown). NULL when out of memory. */
 json_t *job_json_progress(const pd_progress *p);
 
+/* A JSON number, or null when x is not finite (JSON has no inf or NaN). */
+json_t *job_json_real(double x);
+
 /* json_dumps in the compact one-line form SSE needs; NULL when out of memory. */
 char *job_json_dump(const json_t *v);
 

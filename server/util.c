@@ -119,6 +119,27 @@ int util_fmt(char *buf, size_t cap, const char *fmt, ...)
     return (n < 0 || (size_t)n >= cap) ? -1 : 0;
 }
 
+char *util_utf8_fix(char *s)
+{
+    unsigned char *p = (unsigned char *)s;
+    while (*p) {
+        int n = *p < 0x80 ? 1 : (*p >> 5) == 6 ? 2 : (*p >> 4) == 14 ? 3 : (*p >> 3) == 30 ? 4 : 0;
+        int ok = n > 0;
+        for (int i = 1; ok && i < n; i++)
+            ok = (p[i] & 0xc0) == 0x80;
+        if (ok && n == 2) ok = *p >= 0xc2; /* overlong */
+        if (ok && n == 3) ok = !(*p == 0xe0 && p[1] < 0xa0) && !(*p == 0xed && p[1] >= 0xa0);
+        if (ok && n == 4)
+            ok = !(*p == 0xf0 && p[1] < 0x90) && !(*p == 0xf4 && p[1] >= 0x90) && *p <= 0xf4;
+        if (!ok) {
+            *p++ = '?';
+            continue;
+        }
+        p += n;
+    }
+    return s;
+}
+
 /* ---- SHA-256 (FIPS 180-4) ------------------------------------------------------------------ */
 
 static const uint32_t sha_k[64] = {

@@ -27,6 +27,10 @@ int util_fmt(char *buf, size_t cap, const char *fmt, ...)
 #endif
     ;
 
+/* Replaces every byte that is not part of a valid UTF-8 sequence with '?', in place (JSON strings
+ * must be UTF-8; a client's query string or a truncated name may not be). Returns s. */
+char *util_utf8_fix(char *s);
+
 /* Lowercase hex of the SHA-256 of data into out (65 bytes). */
 void util_sha256_hex(const void *data, size_t len, char out[65]);
 

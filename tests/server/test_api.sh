@@ -62,6 +62,9 @@ code=$(req POST /v1/jobs --data-binary @"$tmp/pathmesh.json")
 check mesh_paths_refused "422 /shapes/r/mesh" "$code $(jstr path)"
 code=$(req POST /v1/jobs --data-binary '{"time": 1}')
 check missing_members_422 "422 invalid_scenario /time" "$code $(jstr code) $(jstr path)"
+head -c 3000 /dev/urandom >"$tmp/random.bin"
+code=$(req POST /v1/jobs --data-binary @"$tmp/random.bin")
+check random_bytes_4xx "4 json" "$(echo "$code" | cut -c1) $(jstr code >/dev/null && head -c 9 "$tmp/body" | grep -q '{"error"' && echo json)"
 code=$(req POST /v1/jobs --data-binary '[1, 2]')
 check array_body_422 "422 invalid_scenario" "$code $(jstr code)"
 
@@ -119,7 +122,7 @@ code=$(req GET "/v1/jobs?status=queued&limit=2&after=$idem")
 check list_page_2 "200 $id next=" "$code $(jall id) next=$(jstr next)"
 code=$(req GET '/v1/jobs?status=succeeded')
 check list_by_status_empty '200 {"jobs":[],"next":null}' "$code $(cat "$tmp/body")"
-for q in status=bogus limit=0 limit=1001 limit=abc after=0123456789abcdef colour=red; do
+for q in status=%ff status=bogus limit=0 limit=1001 limit=abc after=0123456789abcdef colour=red; do
     code=$(req GET "/v1/jobs?$q")
     check "list_bad_param_$q" "400 invalid_parameter" "$code $(jstr code)"
 done
@@ -182,6 +185,13 @@ check unknown_route_404 "404 not_found" "$code $(jstr code)"
 code=$(req POST /v1/scenarios/validate --data-binary @examples/collision.json)
 check validate_summary "200 True 2 20000" "$code $(jget "$tmp/body" '" ".join(str(x) for x in [d["valid"], d["summary"]["particles"], d["summary"]["steps"]])')"
 check validate_dt_estimates true "$(jget "$tmp/body" 'str(0 < d["summary"]["dt_stable"] <= d["summary"]["dt_rayleigh"] and d["summary"]["memory_bytes"] > 0).lower()')"
+python3 -c '
+import json, sys
+s = json.load(open("examples/collision.json"))
+s["gravity"] = [1e308, 0, 0]
+json.dump(s, open(sys.argv[1], "w"))' "$tmp/huge.json"
+code=$(req POST /v1/scenarios/validate --data-binary @"$tmp/huge.json")
+check validate_huge_numbers_not_500 true "$([ "$code" -lt 500 ] && echo true)"
 code=$(req POST /v1/scenarios/validate --data-binary @"$tmp/invalid.json")
 check validate_invalid_422 "422 2" "$code $(jget "$tmp/body" 'len(d["error"]["details"])')"
 code=$(req POST /v1/jobs --data-binary @tests/server/long_job.json)
