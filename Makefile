@@ -39,6 +39,7 @@ DEB_PACKAGES := build-essential ocl-icd-opencl-dev opencl-c-headers pocl-opencl-
                 libxml2-utils
 # components add their rules, tests and packages here (server/server.mk: polydemd)
 -include server/server.mk
+-include studies/studies.mk
 -include clients/clients.mk
 
 deps:
