@@ -9,7 +9,7 @@ DEB_PACKAGES += python3-matplotlib python3-h5py python3-numpy libgsl-dev
 STUDIES := sphere_convergence irregular_convergence calibration_rig gravity_packing \
            resolution_scaling
 STUDIES_PRESENT := $(foreach s,$(STUDIES),$(if $(wildcard studies/$(s)/run.sh),$(s)))
-STUDY_TOOLS := $(BUILD)/polydem $(BUILD)/bench/overlap \
+STUDY_TOOLS := $(BUILD)/polydem $(BUILD)/studies/overlap_scaling \
                $(if $(wildcard studies/calibration/*.c),$(BUILD)/studies/repose_fit)
 
 $(BUILD)/studies/repose_fit: studies/calibration/repose_fit.c
@@ -22,3 +22,8 @@ studies: $(STUDY_TOOLS)
 
 studies-quick: $(STUDY_TOOLS)
 	@sh studies/run_all.sh --quick $(STUDIES_PRESENT)
+
+# figure 7.6: a variant of bench/overlap.c with the shape, resolution and depth as arguments
+$(BUILD)/studies/overlap_scaling: studies/resolution_scaling/overlap_scaling.c $(BUILD)/libpolydem.a
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS) $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
