@@ -21,11 +21,11 @@ contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *o
                __global const int *material, __global const pd_real *vert, __global const int *tri,
                __global const int *voff, __global const int *toff, __global const int *vt_off,
                __global const int *vt, __global const pd_real *unit_vol, __global const int *kind,
-               __global const pd_real *params, int nmat, int nparticles, pd_real dt,
-               __global int *iscr, __global pd_real *rscr, int ilen, int rlen, int pts_cap,
-               int nwork, __global pd_real *force, __global pd_real *tq_first,
-               __global pd_real *tq_second, __global pd_real *spring, __global pd_real *kt,
-               __global pd_real *info)
+               __global const pd_real *radius_ratio, __global const pd_real *params, int nmat,
+               int nparticles, pd_real dt, __global int *iscr, __global pd_real *rscr, int ilen,
+               int rlen, int pts_cap, int nwork, __global pd_real *force,
+               __global pd_real *tq_first, __global pd_real *tq_second, __global pd_real *spring,
+               __global pd_real *kt, __global pd_real *info)
 {
     int g = (int)get_global_id(0);
     if (g >= nwork) return;
@@ -46,6 +46,7 @@ contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *o
     wd.sh.vt = vt;
     wd.sh.unit_vol = unit_vol;
     wd.kind = kind;
+    wd.radius_ratio = radius_ratio;
     wd.params = params;
     wd.nmat = nmat;
     wd.nparticles = nparticles;

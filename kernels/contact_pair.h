@@ -49,7 +49,8 @@ typedef struct cp_world {
     PD_GLOBAL const pd_real *x, *q, *v, *w, *size, *inv_m;
     PD_GLOBAL const int *shape, *material;
     np_shapes sh;
-    PD_GLOBAL const int *kind; /* per shape: 0 mesh, 1 sphere */
+    PD_GLOBAL const int *kind;             /* per shape: 0 mesh, 1 sphere */
+    PD_GLOBAL const pd_real *radius_ratio; /* per shape: circumradius / size */
     PD_GLOBAL const pd_real *params;
     int nmat;
     int nparticles; /* bodies at and above are walls: body = nparticles + (key - CH_WALL) */
@@ -212,6 +213,13 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         rstar = r;
         cohesive = 1;
     } else {
+        /* the broad phase's boxes are cubes around the bounding spheres: pairs whose spheres
+         * are apart (about half of them) need no overlap computation */
+        if (!wall_b) {
+            pd_real reach = wd->radius_ratio[a.shape] * a.size + wd->radius_ratio[b.shape] * b.size;
+            pd_v3 d = v3_sub(b.x, a.x);
+            if (v3_dot(d, d) > reach * reach) return;
+        }
         ovl_in in;
         pd_real ra[9];
         np_setup(&wd->sh, &a, &b, 0, &in, ra);
