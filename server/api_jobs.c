@@ -304,20 +304,6 @@ static enum MHD_Result send_job(http_req *r, unsigned status, const char *id, in
     return http_json_hdr(r, status, o, location ? "Location" : NULL, loc);
 }
 
-/* Publishes a job's row as a status event (for the all-jobs streams). */
-static void publish_job(http_req *r, const char *id)
-{
-    job_rec j;
-    if (job_store_get(r->app->st, id, NULL, &j) != JS_OK) return;
-    json_t *o = job_json(&j);
-    char *t = o ? job_json_dump(o) : NULL;
-    int final = strcmp(j.status, "queued") && strcmp(j.status, "running");
-    if (t) sse_publish(r->app->hub, id, j.owner, "status", t, final);
-    free(t);
-    json_decref(o);
-    job_rec_free(&j);
-}
-
 typedef struct insert_ctx {
     http_req *r;
     job_rec job;
@@ -332,12 +318,20 @@ static int insert_job(void *ctx)
     insert_ctx *c = ctx;
     c->rc = job_store_insert(c->r->app->st, &c->job, c->scenario, c->key, c->hash, c->existing);
     if (c->rc != JS_OK) return -1;
-    json_t *o = job_json(&c->job);
-    char *t = o ? job_json_dump(o) : NULL;
-    if (t) sse_publish(c->r->app->hub, c->job.id, c->job.owner, "status", t, 0);
-    free(t);
-    json_decref(o);
+    job_json_publish(c->r->app->hub, &c->job);
     return 0;
+}
+
+/* The answer to a known idempotency key (rc JS_EXISTS or JS_CONFLICT; anything else is a
+ * database failure). */
+static enum MHD_Result seen_key(http_req *r, int rc, const char *key, const char *existing)
+{
+    if (rc == JS_EXISTS) return send_job(r, 200, existing, 1);
+    if (rc == JS_CONFLICT)
+        return http_error(r, 422, "idempotency_key_reused",
+                          "Idempotency-Key '%.100s' was used for another request body (job %s)",
+                          key, existing);
+    return db_error(r);
 }
 
 static int valid_key(const char *k)
@@ -360,13 +354,7 @@ enum MHD_Result api_jobs_create(http_req *r)
     util_sha256_hex(r->body, r->len, hash);
     if (key) {
         int rc = job_store_idempotent(a->st, r->owner, key, hash, existing);
-        if (rc == JS_EXISTS) return send_job(r, 200, existing, 1);
-        if (rc == JS_CONFLICT)
-            return http_error(r, 422, "idempotency_key_reused",
-                              "Idempotency-Key '%.100s' was used for another request body (job "
-                              "%s)",
-                              key, existing);
-        if (rc != JS_NOTFOUND) return db_error(r);
+        if (rc != JS_NOTFOUND) return seen_key(r, rc, key, existing);
     }
     long counts[JOB_NSTATUS];
     if (job_store_count(a->st, counts) != JS_OK) return db_error(r);
@@ -399,12 +387,7 @@ enum MHD_Result api_jobs_create(http_req *r)
         fprintf(stderr, "polydemd: job %s (%s) queued: %ld particles, %ld steps\n", c.job.id,
                 pd_scenario_name(sub.s), sub.sum.particles, sub.sum.steps);
     submission_free(&sub);
-    if (c.rc == JS_EXISTS) return send_job(r, 200, c.existing, 1);
-    if (c.rc == JS_CONFLICT)
-        return http_error(r, 422, "idempotency_key_reused",
-                          "Idempotency-Key '%.100s' was used for another request body (job %s)",
-                          key, c.existing);
-    if (c.rc != JS_OK) return db_error(r);
+    if (c.rc != JS_OK) return seen_key(r, c.rc, key, c.existing);
     return send_job(r, 201, c.job.id, 1);
 }
 
@@ -479,7 +462,7 @@ enum MHD_Result api_job_cancel(http_req *r, const char *id)
             fprintf(stderr, "polydemd: job %s: cancel requested\n", id);
         } else {
             fprintf(stderr, "polydemd: job %s cancelled before it ran\n", id);
-            publish_job(r, id);
+            job_json_publish_id(r->app->hub, r->app->st, id);
         }
         /* 202: a running job stops at the end of its current step; its status follows */
         ret = http_json(r, rc == JS_RUNNING ? 202 : 200, job_json(&j));

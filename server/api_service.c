@@ -13,8 +13,6 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-static const char *const device_states[] = {"starting", "ready", "failed", "unavailable"};
-
 enum MHD_Result api_healthz(http_req *r)
 {
     int db = job_store_ping(r->app->st) == JS_OK;
@@ -23,7 +21,7 @@ enum MHD_Result api_healthz(http_req *r)
     int ok = db && state == DEV_READY;
     json_t *msg = json_object_get(dev, "message");
     json_t *o = json_pack("{s:s, s:s, s:s, s:O*}", "status", ok ? "ok" : "unavailable", "database",
-                          db ? "ok" : "failed", "device", device_states[state], "message",
+                          db ? "ok" : "failed", "device", worker_state_name(state), "message",
                           json_is_string(msg) ? msg : NULL);
     if (o && !db) json_object_set_new(o, "message", json_string("the job database fails"));
     json_decref(dev);

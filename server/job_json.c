@@ -54,3 +54,21 @@ char *job_json_dump(const json_t *v)
 {
     return json_dumps(v, JSON_COMPACT | JSON_REAL_PRECISION(17));
 }
+
+void job_json_publish(sse_hub *hub, const job_rec *j)
+{
+    json_t *o = job_json(j);
+    char *t = o ? job_json_dump(o) : NULL;
+    int final = strcmp(j->status, "queued") && strcmp(j->status, "running");
+    if (t) sse_publish(hub, j->id, j->owner, "status", t, final);
+    free(t);
+    json_decref(o);
+}
+
+void job_json_publish_id(sse_hub *hub, job_store *st, const char *id)
+{
+    job_rec j;
+    if (job_store_get(st, id, NULL, &j) != JS_OK) return;
+    job_json_publish(hub, &j);
+    job_rec_free(&j);
+}

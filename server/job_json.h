@@ -4,6 +4,7 @@
 
 #include "job_store.h"
 #include "polydem.h"
+#include "sse.h"
 
 #include <jansson.h>
 
@@ -20,5 +21,11 @@ json_t *job_json_real(double x);
 
 /* json_dumps in the compact one-line form SSE needs; NULL when out of memory. */
 char *job_json_dump(const json_t *v);
+
+/* Publishes a job row as a "status" event (final once the job has ended). */
+void job_json_publish(sse_hub *hub, const job_rec *j);
+
+/* Reads job id and publishes it as job_json_publish does; nothing when it is gone. */
+void job_json_publish_id(sse_hub *hub, job_store *st, const char *id);
 
 #endif

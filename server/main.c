@@ -119,8 +119,6 @@ static void find_dir(const char *configured, const char *what, const char *const
 
 static int make_dirs(app *a, const config *cfg)
 {
-    char msg[64];
-    (void)msg;
     if (util_fmt(a->results_dir, sizeof a->results_dir, "%s/results", cfg->data) ||
         util_fmt(a->meshes_dir, sizeof a->meshes_dir, "%s/meshes", cfg->data)) {
         fprintf(stderr, "polydemd: data directory name too long\n");

@@ -46,20 +46,6 @@ struct worker {
     int series_stride, series_skip; /* keep every stride-th record after halving */
 };
 
-/* Sends the job's current row as a "status" event (final once it has ended). */
-static void publish_status(worker *w, const char *id)
-{
-    job_rec j;
-    if (job_store_get(w->st, id, NULL, &j) != JS_OK) return;
-    json_t *o = job_json(&j);
-    char *t = o ? job_json_dump(o) : NULL;
-    int final = strcmp(j.status, "queued") && strcmp(j.status, "running");
-    if (t) sse_publish(w->hub, id, j.owner, "status", t, final);
-    free(t);
-    json_decref(o);
-    job_rec_free(&j);
-}
-
 static void live_reset(worker *w)
 {
     w->have_live = 0;
@@ -119,7 +105,7 @@ static int on_progress(const pd_progress *p, void *user)
 /* Runs one claimed job to its end and records the outcome. */
 static void run_job(worker *w, const job_rec *j, const char *scenario)
 {
-    publish_status(w, j->id);
+    job_json_publish_id(w->hub, w->st, j->id);
     pd_scenario *s = NULL;
     pd_diags diags = {0};
     pd_error err = {0};
@@ -131,7 +117,7 @@ static void run_job(worker *w, const job_rec *j, const char *scenario)
         snprintf(msg, sizeof msg, "scenario: %s", err.msg);
         job_store_finish(w->st, j->id, "failed", msg, NULL, NULL);
         fprintf(stderr, "polydemd: job %s failed: %s\n", j->id, msg);
-        publish_status(w, j->id);
+        job_json_publish_id(w->hub, w->st, j->id);
         return;
     }
     snprintf(rel, sizeof rel, "results/%s.h5", j->id);
@@ -172,7 +158,7 @@ static void run_job(worker *w, const job_rec *j, const char *scenario)
         fprintf(stderr, "polydemd: job %s failed: %s\n", j->id, err.msg);
     }
     free(final_json);
-    publish_status(w, j->id);
+    job_json_publish_id(w->hub, w->st, j->id);
 }
 
 /* Runs the device self-test; the caller has set w->busy. */
@@ -391,7 +377,11 @@ int worker_device_state(worker *w)
     return s;
 }
 
-static const char *const state_names[] = {"starting", "ready", "failed", "unavailable"};
+const char *worker_state_name(int state)
+{
+    static const char *const names[] = {"starting", "ready", "failed", "unavailable"};
+    return state >= 0 && state <= DEV_UNAVAILABLE ? names[state] : "unknown";
+}
 
 json_t *worker_device_json(worker *w)
 {
@@ -399,7 +389,7 @@ json_t *worker_device_json(worker *w)
     int db_ok = job_store_count(w->st, counts) == JS_OK;
     pthread_mutex_lock(&w->mu);
     json_t *o = json_pack("{s:s, s:o, s:{s:s, s:s, s:o, s:o}, s:o, s:o, s:o}", "state",
-                          state_names[w->state], "message",
+                          worker_state_name(w->state), "message",
                           w->state_msg[0] ? json_string(w->state_msg) : json_null(), "selftest",
                           "status", w->st_status, "report", w->st_report, "finished_at",
                           w->st_at[0] ? json_string(w->st_at) : json_null(), "seconds",

@@ -47,6 +47,9 @@ int worker_cancel(worker *w, const char *id);
 void worker_stop(worker *w);
 void worker_free(worker *w);
 
+/* "starting", "ready", "failed" or "unavailable". */
+const char *worker_state_name(int state);
+
 /* The device: DEV_* state, and the JSON for /v1/device (info, self-test, queue). */
 int worker_device_state(worker *w);
 json_t *worker_device_json(worker *w);

@@ -21,10 +21,10 @@ wait_progress() {
     i=0
     while [ $i -lt 600 ]; do
         curl -s --max-time 5 -o "$tmp/wp.json" "$URL/v1/jobs/$1"
-        case "$(jget "$tmp/wp.json" 'str(d["status"] == "running" and (d["progress"] or {}).get("step", 0) > 0)')" in
-        True) return 0 ;;
+        case "$(jstr status "$tmp/wp.json")" in
+        running) grep -q '"step":[1-9]' "$tmp/wp.json" && return 0 ;;
+        succeeded | failed | cancelled) return 1 ;;
         esac
-        case "$(jget "$tmp/wp.json" 'd["status"]')" in succeeded | failed | cancelled) return 1 ;; esac
         sleep 0.1
         i=$((i + 1))
     done
@@ -42,7 +42,12 @@ code=$(req GET "/v1/jobs/$l1/frames/0")
 check no_frames_while_running "409 result_not_ready" "$code $(jstr code)"
 python3 tests/server/sse.py "$URL/v1/jobs/$l1/events" 60 >"$tmp/l1.sse" 2>&1 &
 sse_pid=$!
-sleep 0.5
+# cancel once the client has seen two progress events
+i=0
+while [ "$(grep -c '"event": "progress"' "$tmp/l1.sse")" -lt 2 ] && [ $i -lt 100 ]; do
+    sleep 0.1
+    i=$((i + 1))
+done
 t0=$(date +%s.%N)
 code=$(req POST "/v1/jobs/$l1/cancel")
 check cancel_running_202 "202 running" "$code $(jstr status)"
