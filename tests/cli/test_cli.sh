@@ -1,13 +1,7 @@
 #!/bin/sh
 # test_cli.sh - the polydem CLI contract, driven as other tools drive it: JSON on stdout, exit 2
 # with a message on stderr for bad arguments or meshes. Prints "N passed, N failed".
-POLYDEM=${POLYDEM:-build/polydem}
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-passed=0
-failed=0
-ok() { passed=$((passed + 1)); echo "ok   $1"; }
-bad() { failed=$((failed + 1)); echo "FAIL $1: $2"; }
+. "$(dirname "$0")/lib.sh"
 
 # json_num FILE KEY [INDEX]: a number (or an array element, 0-based) from the one-line JSON output
 # (the "units" object, which repeats key names, is dropped first)
@@ -17,18 +11,6 @@ json_num() {
 }
 # near EXPECTED ACTUAL TOL: |e - a| <= tol
 near() { awk -v e="$1" -v a="$2" -v t="$3" 'BEGIN { d = e - a; if (d < 0) d = -d; exit !(a != "" && d <= t) }'; }
-
-# expect_fail NAME EXIT MESSAGE-FRAGMENT -- command...
-expect_fail() {
-    name=$1 code=$2 frag=$3
-    shift 4
-    "$@" >"$tmp/out" 2>"$tmp/err"
-    rc=$?
-    if [ "$rc" -ne "$code" ]; then bad "$name" "exit $rc, expected $code ($(cat "$tmp/err"))"
-    elif ! grep -q -- "$frag" "$tmp/err"; then bad "$name" "stderr lacks '$frag': $(cat "$tmp/err")"
-    elif [ -s "$tmp/out" ]; then bad "$name" "printed on stdout: $(cat "$tmp/out")"
-    else ok "$name"; fi
-}
 
 # 1. offset unit cubes: the box [0, 0.5] x [-.5, .5]^2, exact in binary
 $POLYDEM overlap builtin:cube builtin:cube --pose-a "0 0 0 1 0 0 0" --pose-b "0.5 0 0 1 0 0 0" >"$tmp/o1"
@@ -231,5 +213,4 @@ expect_fail unknown_option 2 "--bogus" -- $POLYDEM overlap builtin:cube builtin:
 expect_fail unknown_builtin 2 "dodecahedron" -- $POLYDEM mesh-info builtin:dodecahedron
 expect_fail unknown_command 2 "frobnicate" -- $POLYDEM frobnicate
 
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+done_tests

@@ -2,14 +2,8 @@
 # test_schema.sh - schemas/scenario.schema.json and the C parser agree: documents the schema
 # accepts, `polydem validate` accepts (examples/), and documents with a structural error are
 # refused by both. Uses Debian's python3-jsonschema (make deps). Prints "N passed, N failed".
-POLYDEM=${POLYDEM:-build/polydem}
 PY=/usr/bin/python3
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
-passed=0
-failed=0
-ok() { passed=$((passed + 1)); echo "ok   $1"; }
-bad() { failed=$((failed + 1)); echo "FAIL $1: $2"; }
+. "$(dirname "$0")/lib.sh"
 
 schema_check() { # FILE -> exit 0 when the schema accepts it, message on stderr otherwise
     $PY - "$1" <<'PY'
@@ -43,5 +37,4 @@ if $PY -c "import jsonschema" 2>/dev/null; then
 else
     bad schema_tools "python3-jsonschema is missing: run make deps"
 fi
-echo "$passed passed, $failed failed"
-[ "$failed" -eq 0 ]
+done_tests
