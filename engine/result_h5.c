@@ -42,7 +42,7 @@ typedef struct rh5_wall {
 } rh5_wall;
 
 enum { F_TIME, F_STEP, F_POS, F_QUAT, F_VEL, F_ANGVEL, F_MESH, NFRAME_DS };
-enum { S_TIME, S_STEP, S_KE, S_CONTACTS, S_BROAD, S_RATIO, NSTATS_DS };
+enum { S_TIME, S_STEP, S_KE, S_CONTACTS, S_BROAD, S_RATIO, S_WALL_TIME, NSTATS_DS };
 
 struct rh5_writer {
     char *path, *partial;
@@ -492,6 +492,7 @@ static int setup_series(rh5_writer *w, pd_error *err)
     if (!rc) rc = make_ext(w, &w->st[S_CONTACTS], "/stats/contacts", L, 0, 0, "1", err);
     if (!rc) rc = make_ext(w, &w->st[S_BROAD], "/stats/broad_pairs", L, 0, 0, "1", err);
     if (!rc) rc = make_ext(w, &w->st[S_RATIO], "/stats/max_overlap_ratio", D, 0, 0, "1", err);
+    if (!rc) rc = make_ext(w, &w->st[S_WALL_TIME], "/stats/wall_time", D, 0, 0, "s", err);
     if (!rc) rc = make_group(w, "/stats/wall_force", err);
     for (int i = 0; i < w->nwalls && !rc; i++) {
         char p[NAME_MAX_LEN + 32];
@@ -643,7 +644,7 @@ int rh5_write_frame(rh5_writer *w, double time, long long step, const double *po
 
 int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_energy,
                     long long contacts, long long broad_pairs, double max_overlap_ratio,
-                    const double *wall_forces, pd_error *err)
+                    double wall_time, const double *wall_forces, pd_error *err)
 {
     quiet();
     int rc = check_append(w, "stats", err);
@@ -652,8 +653,8 @@ int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_e
         return pd_error_set(err, PD_EINVAL, "%s: stats row %lld: wall forces missing (%d walls)",
                             w->path, w->nstats, w->nwalls);
     }
-    const void *data[NSTATS_DS] = {&time,     &step,        &kinetic_energy,
-                                   &contacts, &broad_pairs, &max_overlap_ratio};
+    const void *data[NSTATS_DS] = {
+        &time, &step, &kinetic_energy, &contacts, &broad_pairs, &max_overlap_ratio, &wall_time};
     for (int k = 0; k < NSTATS_DS + w->nwalls; k++) {
         const rh5_ext *e = k < NSTATS_DS ? &w->st[k] : &w->walls[k - NSTATS_DS].force;
         const void *d = k < NSTATS_DS ? data[k] : &wall_forces[3 * (k - NSTATS_DS)];

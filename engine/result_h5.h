@@ -16,7 +16,10 @@
  *   /frames/        time (F) [s], step (F) int64, position (F,N,3) [m], orientation (F,N,4) [1]
  *                   (w,x,y,z), velocity (F,N,3) [m/s], angular_velocity (F,N,3) [rad/s]
  *   /stats/         time (S) [s], step (S) int64, kinetic_energy (S) [J], contacts (S) int64,
- *                   broad_pairs (S) int64, max_overlap_ratio (S) [1], wall_force/<wall> (S,3) [N]
+ *                   broad_pairs (S) int64, max_overlap_ratio (S) [1], wall_time (S) [s]
+ *                   (wall-clock time since the run started, when the row was written; the
+ *                   differences between rows time the steps between them), wall_force/<wall>
+ *                   (S,3) [N]
  *   /walls/<name>/  vertices (nv,3) [m] at t=0, triangles (nt,3) int32
  *   /xdmf/          additions for the XDMF file: particle_id (N) int32 = 0..N-1 (the Polyvertex
  *                   connectivity); with RH5_SHAPE_MESHES also vertices (F,V,3) [m], every
@@ -94,11 +97,11 @@ int rh5_set_particles(rh5_writer *w, int n, const int *shape, const int *materia
 int rh5_write_frame(rh5_writer *w, double time, long long step, const double *pos,
                     const double *quat, const double *vel, const double *angvel, pd_error *err);
 
-/* Appends one stats row; wall_forces holds 3 values (N) per wall in add order (NULL when there
- * are no walls). Flushes the file. */
+/* Appends one stats row; wall_time is the wall-clock time (s) since the run started; wall_forces
+ * holds 3 values (N) per wall in add order (NULL when there are no walls). Flushes the file. */
 int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_energy,
                     long long contacts, long long broad_pairs, double max_overlap_ratio,
-                    const double *wall_forces, pd_error *err);
+                    double wall_time, const double *wall_forces, pd_error *err);
 
 /*
  * Closes the file, writes "<path>.xmf" (through a temporary name), renames "<path>.partial" to

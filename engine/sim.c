@@ -257,7 +257,7 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
             pr.contacts = contacts;
             pr.broad_pairs = m->n_old;
             rc = rh5_write_stats(w, t, step, pr.kinetic_energy, contacts, m->n_old, ratio,
-                                 m->nwall ? h.wall_force : NULL, err);
+                                 now_seconds() - t_start, m->nwall ? h.wall_force : NULL, err);
             if (rc != PD_OK) goto done;
         }
         if (frame_due) {

@@ -54,6 +54,7 @@ for p in "/frames/position Dataset {5/Inf, 2, 3}" "/frames/orientation Dataset {
     "/frames/time Dataset {5/Inf}" "/stats/kinetic_energy Dataset {21/Inf}" \
     "/stats/contacts Dataset {21/Inf}" "/stats/broad_pairs Dataset {21/Inf}" \
     "/stats/max_overlap_ratio Dataset {21/Inf}" "/stats/wall_force/floor Dataset {21/Inf, 3}" \
+    "/stats/wall_time Dataset {21/Inf}" \
     "/particles/mass Dataset {2}" "/particles/shape Dataset {2}" "/shapes/ball/vertices" \
     "/shapes/s/triangles" "/walls/floor/vertices"; do
     tr -s ' ' <"$tmp/ls" | grep -qF "$p" || missing="$missing [$p]"

@@ -239,7 +239,8 @@ static int write_run(const char *path, int fields, int close_it, pd_error *err)
     }
     for (int s = 0; s < 4; s++) {
         double wf[3] = {s, -s, 9.81 * s};
-        if (rh5_write_stats(w, 0.1 * s, 40LL * s, 0.5 * s, 7LL * s, 11LL * s, 0.001 * s, wf, err))
+        if (rh5_write_stats(w, 0.1 * s, 40LL * s, 0.5 * s, 7LL * s, 11LL * s, 0.001 * s, 2.5 * s,
+                            wf, err))
             goto fail;
     }
     if (!close_it) {
@@ -404,6 +405,9 @@ TEST(roundtrip_hdf5)
     CHECK_NEAR(0.1 * 3, d[3], 0);
     CHECK_EQ_INT(1, read_ds(f, "/stats/max_overlap_ratio", H5T_NATIVE_DOUBLE, d, 64, dims));
     CHECK_NEAR(0.001 * 3, d[3], 0);
+    CHECK_EQ_INT(1, read_ds(f, "/stats/wall_time", H5T_NATIVE_DOUBLE, d, 64, dims));
+    CHECK_EQ_INT(4, dims[0]);
+    CHECK_NEAR(2.5 * 3, d[3], 0);
     CHECK_EQ_INT(1, read_ds(f, "/stats/step", H5T_NATIVE_LLONG, lb, 16, dims));
     CHECK_EQ_INT(120, lb[3]);
     CHECK_EQ_INT(1, read_ds(f, "/stats/contacts", H5T_NATIVE_LLONG, lb, 16, dims));
@@ -420,7 +424,7 @@ TEST(roundtrip_hdf5)
     /* units: on every dataset, and the right ones where they matter */
     units_count u = {0};
     CHECK(H5Lvisit(f, H5_INDEX_NAME, H5_ITER_INC, check_units_cb, &u) >= 0);
-    CHECK_EQ_INT(27, u.datasets); /* 4 shapes, 2 walls, 4 particles, 4 xdmf, 6 frames, 7 stats */
+    CHECK_EQ_INT(28, u.datasets); /* 4 shapes, 2 walls, 4 particles, 4 xdmf, 6 frames, 8 stats */
     CHECK_EQ_INT(0, u.missing);
     if (u.missing) printf("  first dataset without units: %s\n", u.first_missing);
     static const char *const units[][2] = {{"/frames/position", "m"},
@@ -435,7 +439,8 @@ TEST(roundtrip_hdf5)
                                            {"/stats/wall_force/floor", "N"},
                                            {"/shapes/cube/triangles", ""},
                                            {"/walls/floor/vertices", "m"},
-                                           {"/stats/max_overlap_ratio", "1"}};
+                                           {"/stats/max_overlap_ratio", "1"},
+                                           {"/stats/wall_time", "s"}};
     for (size_t a = 0; a < sizeof units / sizeof units[0]; a++) {
         s = attr_str(f, units[a][0], "units", 0);
         if (!s || strcmp(s, units[a][1]))
@@ -565,7 +570,7 @@ TEST(error_frame_before_particles)
     CHECK_EQ_INT(PD_EINVAL, rh5_write_frame(w, 0, 0, pos, q, pos, NULL, &err));
     CHECK_STR_CONTAINS(err.msg, path);
     CHECK_STR_CONTAINS(err.msg, "particle count unknown");
-    CHECK_EQ_INT(PD_EINVAL, rh5_write_stats(w, 0, 0, 0, 0, 0, 0, NULL, &err));
+    CHECK_EQ_INT(PD_EINVAL, rh5_write_stats(w, 0, 0, 0, 0, 0, 0, 0, NULL, &err));
     CHECK_STR_CONTAINS(err.msg, "rh5_set_particles first");
     /* closing a result without particles discards it */
     CHECK_EQ_INT(PD_EINVAL, rh5_close(w, &err));
