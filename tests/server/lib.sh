@@ -30,6 +30,10 @@ cleanup() {
         kill -9 "$PID" 2>/dev/null
         wait "$PID" 2>/dev/null
     fi
+    if [ -n "$jeval_pid" ]; then
+        exec 7>&- 8<&-
+        wait "$jeval_pid" 2>/dev/null
+    fi
     rm -rf "$tmp"
 }
 trap cleanup EXIT
@@ -99,18 +103,17 @@ req() {
 }
 
 # jget FILE EXPR: evaluates a Python expression over the JSON in FILE (as d); prints the value
-# (strings bare, the rest as JSON), or "ERROR: ..." when it cannot.
+# (strings bare, the rest as JSON), or "ERROR: ..." when it cannot. One Python process
+# (tests/server/jeval.py) answers every query of the script.
 jget() {
-    python3 -c '
-import json, sys
-try:
-    d = json.load(open(sys.argv[1]))
-    v = eval(sys.argv[2])
-    print(v if isinstance(v, str) else json.dumps(v))
-except Exception as e:
-    print("ERROR: %s: %s" % (type(e).__name__, e))
-' "$1" "$2"
+    printf '%s\t%s\n' "$1" "$2" >&7
+    IFS= read -r answer <&8
+    printf '%s\n' "$answer"
 }
+mkfifo "$tmp/jeval.in" "$tmp/jeval.out"
+python3 tests/server/jeval.py <"$tmp/jeval.in" >"$tmp/jeval.out" &
+jeval_pid=$!
+exec 7>"$tmp/jeval.in" 8<"$tmp/jeval.out"
 
 # jstr KEY [FILE]: the first string value of "KEY" in compact JSON (default $tmp/body), without
 # starting Python: for the daemon's one-line answers ("id", "status", an error's "code").
