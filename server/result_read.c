@@ -143,6 +143,14 @@ json_t *result_stats(const char *path, char *msg, size_t ml)
         if (c) json_object_set_new(o, cols[i].name, c);
         json_object_set_new(units, cols[i].name, json_string(cols[i].unit));
     }
+    size_t nw = 0; /* wall-clock time per row: in results written since it was added */
+    json_t *wall = ok ? column(f, "/stats/wall_time", 0, &nw) : NULL;
+    if (wall && nw == rows) {
+        json_object_set_new(o, "wall_time", wall);
+        json_object_set_new(units, "wall_time", json_string("s"));
+    } else {
+        json_decref(wall);
+    }
     json_t *walls = ok ? json_object() : NULL;
     char **names = ok ? member_names(f, "/stats/wall_force") : NULL;
     ok = ok && walls && names;
