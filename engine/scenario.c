@@ -829,7 +829,11 @@ static void parse_rest(sc_parse *p, json_t *root)
         diag(p, "/seed", "must be a non-negative integer");
     else if (seed)
         s->seed = (unsigned long long)json_integer_value(seed);
-    numvec(p, root, "", "gravity", 3, g0, s->gravity);
+    if (numvec(p, root, "", "gravity", 3, g0, s->gravity)) {
+        double g = hypot(hypot(s->gravity[0], s->gravity[1]), s->gravity[2]);
+        if (!(g <= 1e6)) /* beyond any centrifuge; overflows the time step estimates */
+            diag(p, "/gravity", "magnitude %g m/s^2 is beyond 1e6 m/s^2", g);
+    }
     json_t *au = json_object_get(root, "allow_unstable_dt");
     if (au && !json_is_boolean(au)) diag(p, "/allow_unstable_dt", "must be true or false");
     s->allow_unstable_dt = json_is_true(au);
@@ -975,7 +979,9 @@ int pd_scenario_parse(const char *json_text, const char *base_dir, pd_scenario *
     parse_particles(&p, root);
     parse_walls(&p, root);
     json_decref(root);
-    if (!s->mat || (!s->shape && s->nshape) || (!s->group && s->ngroup)) {
+    /* missing arrays without a recorded problem can only be failed allocations (an absent or
+     * empty "materials" is a problem already reported at its path) */
+    if (!p.failed && (!s->mat || (!s->shape && s->nshape) || (!s->group && s->ngroup))) {
         pd_scenario_destroy(s);
         return pd_error_set(err, PD_ENOMEM, "scenario: out of memory");
     }
@@ -986,7 +992,12 @@ int pd_scenario_parse(const char *json_text, const char *base_dir, pd_scenario *
     if (!p.failed) {
         double rayleigh, hertz, stable;
         sc_dt_estimates(s, &rayleigh, &hertz, &stable);
-        if (s->dt > stable && !s->allow_unstable_dt)
+        if (!isfinite(stable) || !(stable > 0))
+            diag(&p, "/time/dt",
+                 "the stable time step estimate is %g s: check the materials, sizes, velocities "
+                 "and gravity for extreme values",
+                 stable);
+        else if (s->dt > stable && !s->allow_unstable_dt)
             diag(&p, "/time/dt",
                  "%g s exceeds the stable estimate %.3g s (0.3 x Rayleigh time %.3g s of the "
                  "smallest particle, 1/20 of the shortest Hertz contact time %.3g s); set "

@@ -237,6 +237,25 @@ TEST(errors_name_the_field)
                  "/walls/0", "exactly one of \"box\" or \"mesh\"");
     expect_error(BASE_HEAD "\"output\": {\"fields\": [\"position\", \"pressure\"]}," BASE_GROUP,
                  "/output/fields/1", "must be one of");
+    expect_error(BASE_HEAD "\"gravity\": [1e308, 0, 0]," BASE_GROUP, "/gravity", "beyond 1e6");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"], \"cohesion\": 10}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/interactions/0/cohesion_range", "required");
+}
+
+/* An empty object is invalid input, reported field by field, not an allocation failure. */
+TEST(empty_scenario_is_invalid_not_out_of_memory)
+{
+    pd_diags d = {0, 0, NULL};
+    pd_scenario *s = NULL;
+    pd_error err = {0};
+    int rc = pd_scenario_parse("{}", NULL, &s, &d, &err);
+    CHECK_EQ_INT(PD_EINVAL, rc);
+    CHECK(has(&d, "/materials", "required"));
+    CHECK(has(&d, "/particles", "required"));
+    pd_diags_free(&d);
 }
 
 TEST(every_error_is_reported)
@@ -304,6 +323,7 @@ int main(void)
     RUN(defaults);
     RUN(errors_name_the_field);
     RUN(every_error_is_reported);
+    RUN(empty_scenario_is_invalid_not_out_of_memory);
     RUN(unstable_dt_is_refused_with_the_estimate);
     return TEST_DONE();
 }
