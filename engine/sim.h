@@ -76,6 +76,9 @@ typedef struct sim {
     double stage_seconds[5];
 } sim;
 
+/* Up to this many particles the broad phase tests all pairs of boxes (no tree: fewer launches). */
+#define SIM_BRUTE_MAX 16
+
 enum { SIM_INTEGRATE, SIM_BVH, SIM_TRAVERSE, SIM_CONTACTS, SIM_GATHER, SIM_NSTAGES };
 
 /* sim_state.c: set-up, host <-> device copies, wall motion */

@@ -100,48 +100,52 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     if (e != CL_SUCCESS) return arg_fail(err, "particle_boxes");
     if ((rc = cl_launch(dev, m->k_boxes, (size_t)n, "particle_boxes", err)) != PD_OK) return rc;
 
-    e |= ARG(m->k_codes, 0, m->pbox);
-    e |= ARG(m->k_codes, 1, n);
-    for (int k = 0; k < 3; k++) {
-        e |= arg_real(m, m->k_codes, 2 + k, m->lo[k]);
-        e |= arg_real(m, m->k_codes, 5 + k, m->inv_ext[k]);
-    }
-    e |= ARG(m->k_codes, 8, m->codes);
-    e |= ARG(m->k_codes, 9, m->idx);
-    e |= ARG(m->k_codes, 10, morton_drop);
-    if (e != CL_SUCCESS) return arg_fail(err, "bvh_codes");
-    if ((rc = cl_launch(dev, m->k_codes, (size_t)n, "bvh_codes", err)) != PD_OK) return rc;
-    static const int morton_shifts[8] = {0, 8, 16, 24, 32, 40, 48, 56};
-    rc = dsort_radix(&m->sort, &m->codes, &m->idx, &m->codes_tmp, &m->idx_tmp, n, morton_shifts, 8,
-                     err);
-    if (rc != PD_OK) return rc;
+    /* small runs: the traversal kernels test every pair of boxes instead of building a tree */
+    int brute = n <= SIM_BRUTE_MAX;
+    if (!brute) {
+        e |= ARG(m->k_codes, 0, m->pbox);
+        e |= ARG(m->k_codes, 1, n);
+        for (int k = 0; k < 3; k++) {
+            e |= arg_real(m, m->k_codes, 2 + k, m->lo[k]);
+            e |= arg_real(m, m->k_codes, 5 + k, m->inv_ext[k]);
+        }
+        e |= ARG(m->k_codes, 8, m->codes);
+        e |= ARG(m->k_codes, 9, m->idx);
+        e |= ARG(m->k_codes, 10, morton_drop);
+        if (e != CL_SUCCESS) return arg_fail(err, "bvh_codes");
+        if ((rc = cl_launch(dev, m->k_codes, (size_t)n, "bvh_codes", err)) != PD_OK) return rc;
+        static const int morton_shifts[4] = {0, 8, 16, 24}; /* codes of 32 bits (morton_drop) */
+        rc = dsort_radix(&m->sort, &m->codes, &m->idx, &m->codes_tmp, &m->idx_tmp, n, morton_shifts,
+                         4, err);
+        if (rc != PD_OK) return rc;
 
-    e |= ARG(m->k_leaves, 0, m->pbox);
-    e |= ARG(m->k_leaves, 1, m->idx);
-    e |= ARG(m->k_leaves, 2, n);
-    e |= ARG(m->k_leaves, 3, m->tbox);
-    e |= ARG(m->k_nodes, 0, m->codes);
-    e |= ARG(m->k_nodes, 1, n);
-    e |= ARG(m->k_nodes, 2, m->left);
-    e |= ARG(m->k_nodes, 3, m->right);
-    e |= ARG(m->k_nodes, 4, m->parent);
-    e |= ARG(m->k_refit, 0, m->tbox);
-    e |= ARG(m->k_refit, 1, m->left);
-    e |= ARG(m->k_refit, 2, m->right);
-    e |= ARG(m->k_refit, 3, m->parent);
-    e |= ARG(m->k_refit, 4, n);
-    e |= ARG(m->k_refit, 5, m->arrivals);
-    if (e != CL_SUCCESS) return arg_fail(err, "bvh_leaves/bvh_nodes/bvh_refit");
-    if ((rc = cl_launch(dev, m->k_leaves, (size_t)n, "bvh_leaves", err)) != PD_OK) return rc;
-    if (n > 1) {
-        if ((rc = cl_launch(dev, m->k_nodes, (size_t)n - 1, "bvh_nodes", err)) != PD_OK) return rc;
-        int zero = 0;
-        e = clEnqueueFillBuffer(dev->queue, m->arrivals, &zero, sizeof zero, 0,
-                                sizeof(int) * (size_t)(n - 1), 0, NULL, NULL);
-        if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueFillBuffer", e);
-        if ((rc = cl_launch(dev, m->k_refit, (size_t)n, "bvh_refit", err)) != PD_OK) return rc;
+        e |= ARG(m->k_leaves, 0, m->pbox);
+        e |= ARG(m->k_leaves, 1, m->idx);
+        e |= ARG(m->k_leaves, 2, n);
+        e |= ARG(m->k_leaves, 3, m->tbox);
+        e |= ARG(m->k_nodes, 0, m->codes);
+        e |= ARG(m->k_nodes, 1, n);
+        e |= ARG(m->k_nodes, 2, m->left);
+        e |= ARG(m->k_nodes, 3, m->right);
+        e |= ARG(m->k_nodes, 4, m->parent);
+        e |= ARG(m->k_refit, 0, m->tbox);
+        e |= ARG(m->k_refit, 1, m->left);
+        e |= ARG(m->k_refit, 2, m->right);
+        e |= ARG(m->k_refit, 3, m->parent);
+        e |= ARG(m->k_refit, 4, n);
+        e |= ARG(m->k_refit, 5, m->arrivals);
+        if (e != CL_SUCCESS) return arg_fail(err, "bvh_leaves/bvh_nodes/bvh_refit");
+        if ((rc = cl_launch(dev, m->k_leaves, (size_t)n, "bvh_leaves", err)) != PD_OK) return rc;
+        if (n > 1) {
+            if ((rc = cl_launch(dev, m->k_nodes, (size_t)n - 1, "bvh_nodes", err)) != PD_OK)
+                return rc;
+            int zero = 0;
+            e = clEnqueueFillBuffer(dev->queue, m->arrivals, &zero, sizeof zero, 0,
+                                    sizeof(int) * (size_t)(n - 1), 0, NULL, NULL);
+            if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueFillBuffer", e);
+            if ((rc = cl_launch(dev, m->k_refit, (size_t)n, "bvh_refit", err)) != PD_OK) return rc;
+        }
     }
-
     stage_end(m, SIM_BVH, t0);
     e |= ARG(m->k_count, 0, m->tbox);
     e |= ARG(m->k_count, 1, m->left);
@@ -153,6 +157,7 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     e |= ARG(m->k_count, 7, nw);
     e |= ARG(m->k_count, 8, m->count);
     e |= ARG(m->k_count, 9, m->cand);
+    e |= ARG(m->k_count, 10, brute);
     if (e != CL_SUCCESS) return arg_fail(err, "broad_count");
     if ((rc = cl_launch(dev, m->k_count, (size_t)n, "broad_count", err)) != PD_OK) return rc;
     if ((rc = dsort_scan(&m->sort, m->count, n, m->offset, err)) != PD_OK) return rc;
@@ -180,6 +185,7 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     e |= ARG(m->k_write, 9, m->cand);
     e |= ARG(m->k_write, 10, m->ids);
     e |= ARG(m->k_write, 11, m->cur.keys);
+    e |= ARG(m->k_write, 12, brute);
     if (e != CL_SUCCESS) return arg_fail(err, "broad_write");
     rc = cl_launch(dev, m->k_write, (size_t)n, "broad_write", err);
     stage_end(m, SIM_TRAVERSE, t0);

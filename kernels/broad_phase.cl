@@ -53,6 +53,23 @@ PD_FN int walls_meeting(__global const pd_real *wbox, int nwall, const pd_real *
 }
 
 /*
+ * Partners above i found by testing every later particle's box, written up to cap: for runs of
+ * a few particles (the host's `brute` flag), the same pairs in the same order as the tree gives,
+ * without the tree's ~25 kernel launches per step, which dominate such a step.
+ */
+PD_FN int brute_after(__global const pd_real *pbox, int n, const pd_real *q, int i,
+                      __global int *out, int cap)
+{
+    int m = 0;
+    for (int j = i + 1; j < n; j++)
+        if (bvh_boxes_meet(pbox + 6 * j, q)) {
+            if (m < cap) out[m] = j;
+            m++;
+        }
+    return m;
+}
+
+/*
  * Number of candidate pairs of particle i (partners above i, then walls). The first BROAD_CAP
  * partners are kept in cand[i * BROAD_CAP ..], so broad_write traverses again only for particles
  * with more.
@@ -61,15 +78,16 @@ PD_FN int walls_meeting(__global const pd_real *wbox, int nwall, const pd_real *
 __kernel void broad_count(__global const pd_real *box, __global const int *left,
                           __global const int *right, __global const int *idx, int n,
                           __global const pd_real *pbox, __global const pd_real *wbox, int nwall,
-                          __global int *count, __global int *cand)
+                          __global int *count, __global int *cand, int brute)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
     pd_real q[6];
     for (int c = 0; c < 6; c++)
         q[c] = pbox[6 * i + c];
-    int m =
-        bvh_query_after(box, left, right, n, q, idx, i, cand + (size_t)i * BROAD_CAP, BROAD_CAP);
+    __global int *keep = cand + (size_t)i * BROAD_CAP;
+    int m = brute ? brute_after(pbox, n, q, i, keep, BROAD_CAP)
+                  : bvh_query_after(box, left, right, n, q, idx, i, keep, BROAD_CAP);
     count[i] = m + walls_meeting(wbox, nwall, q, 0, (unsigned)i);
 }
 
@@ -82,7 +100,7 @@ __kernel void broad_write(__global const pd_real *box, __global const int *left,
                           __global const int *right, __global const int *idx, int n,
                           __global const pd_real *pbox, __global const pd_real *wbox, int nwall,
                           __global const int *offset, __global const int *cand,
-                          __global int *scratch, __global ch_key *keys)
+                          __global int *scratch, __global ch_key *keys, int brute)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
@@ -99,7 +117,8 @@ __kernel void broad_write(__global const pd_real *box, __global const int *left,
         for (int a = 0; a < m; a++)
             ids[a] = cand[(size_t)i * BROAD_CAP + a];
     } else {
-        m = bvh_query_after(box, left, right, n, q, idx, i, ids, m);
+        m = brute ? brute_after(pbox, n, q, i, ids, m)
+                  : bvh_query_after(box, left, right, n, q, idx, i, ids, m);
     }
     for (int a = 1; a < m; a++) {
         int v = ids[a], b = a - 1;
