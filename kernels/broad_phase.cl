@@ -2,11 +2,13 @@
  * broad_phase.cl - boxes, leaf placement and traversal of the broad phase (kernels/bvh.h), one
  * work-item per particle. Built with -DPD_DOUBLE=0 or 1.
  *
- * Candidate pairs are found twice (from either particle), so each particle keeps only partners
- * with a larger index; walls (few, tested box against box) follow its particle partners. A pass
- * counts each particle's pairs, the host scans the counts into offsets, and a second pass writes
- * the keys, sorted within each particle's segment: the step's keys come out globally sorted
- * (first body, then second) without a global sort.
+ * Particle boxes are cubes around bounding spheres (circumradius plus margin), and a candidate
+ * pair must also have its bounding spheres meet. Candidate pairs are found twice (from either
+ * particle), so each particle keeps only partners with a larger index; walls (few, tested box
+ * against box) follow its particle partners. A pass counts each particle's pairs, the host scans
+ * the counts into offsets, and a second pass writes the keys, sorted within each particle's
+ * segment: the step's keys come out globally sorted (first body, then second) without a global
+ * sort.
  */
 #include "pd_real.h"
 #include "bvh.h"
@@ -62,7 +64,7 @@ PD_FN int brute_after(__global const pd_real *pbox, int n, const pd_real *q, int
 {
     int m = 0;
     for (int j = i + 1; j < n; j++)
-        if (bvh_boxes_meet(pbox + 6 * j, q)) {
+        if (bvh_boxes_meet(pbox + 6 * j, q) && bvh_spheres_meet(pbox + 6 * j, q)) {
             if (m < cap) out[m] = j;
             m++;
         }
@@ -87,7 +89,7 @@ __kernel void broad_count(__global const pd_real *box, __global const int *left,
         q[c] = pbox[6 * i + c];
     __global int *keep = cand + (size_t)i * BROAD_CAP;
     int m = brute ? brute_after(pbox, n, q, i, keep, BROAD_CAP)
-                  : bvh_query_after(box, left, right, n, q, idx, i, keep, BROAD_CAP);
+                  : bvh_query_after(box, left, right, n, q, idx, i, 1, keep, BROAD_CAP);
     count[i] = m + walls_meeting(wbox, nwall, q, 0, (unsigned)i);
 }
 
@@ -118,7 +120,7 @@ __kernel void broad_write(__global const pd_real *box, __global const int *left,
             ids[a] = cand[(size_t)i * BROAD_CAP + a];
     } else {
         m = brute ? brute_after(pbox, n, q, i, ids, m)
-                  : bvh_query_after(box, left, right, n, q, idx, i, ids, m);
+                  : bvh_query_after(box, left, right, n, q, idx, i, 1, ids, m);
     }
     for (int a = 1; a < m; a++) {
         int v = ids[a], b = a - 1;

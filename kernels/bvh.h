@@ -116,14 +116,30 @@ PD_FN int bvh_boxes_meet(PD_GLOBAL const pd_real *a, const pd_real *q)
 }
 
 /*
+ * For boxes that are cubes centred on bounding spheres (the engine's particle boxes): 1 when the
+ * spheres inscribed in leaf box a and query box q meet.
+ */
+PD_FN int bvh_spheres_meet(PD_GLOBAL const pd_real *a, const pd_real *q)
+{
+    pd_real dx = (a[0] + a[3]) - (q[0] + q[3]), dy = (a[1] + a[4]) - (q[1] + q[4]),
+            dz = (a[2] + a[5]) - (q[2] + q[5]);
+    /* all doubled: centres and radii; grown by a few ulps so rounding of the boxes never drops
+     * a touching pair */
+    pd_real r = ((a[3] - a[0]) + (q[3] - q[0])) * (PD_R(1) + PD_R(64) * PD_EPS);
+    return dx * dx + dy * dy + dz * dz <= r * r;
+}
+
+/*
  * Leaves whose boxes meet query box q (lo xyz, hi xyz), as the ids idx[sorted position] (or the
- * sorted positions when idx is NULL), keeping only ids above `after` (-1: all). They are written
- * to out up to cap; returns how many there are (more than cap means the caller retries with more
- * room), -1 when the stack would overflow (it cannot for an LBVH of 2^31 leaves).
+ * sorted positions when idx is NULL), keeping only ids above `after` (-1: all). With `spheres`,
+ * the boxes are cubes around bounding spheres and a leaf must also pass bvh_spheres_meet. They are
+ * written to out up to cap; returns how many there are (more than cap means the caller retries with
+ * more room), -1 when the stack would overflow (it cannot for an LBVH of 2^31 leaves).
  */
 PD_FN int bvh_query_after(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *left,
                           PD_GLOBAL const int *right, int n, const pd_real *q,
-                          PD_GLOBAL const int *idx, int after, PD_GLOBAL int *out, int cap)
+                          PD_GLOBAL const int *idx, int after, int spheres, PD_GLOBAL int *out,
+                          int cap)
 {
     int count = 0;
     int stack[BVH_STACK], top = 0;
@@ -133,7 +149,7 @@ PD_FN int bvh_query_after(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *lef
         if (!bvh_boxes_meet(box + 6 * node, q)) continue;
         if (node >= n - 1) {
             int k = node - (n - 1), id = idx ? idx[k] : k;
-            if (id > after) {
+            if (id > after && (!spheres || bvh_spheres_meet(box + 6 * node, q))) {
                 if (count < cap) out[count] = id;
                 count++;
             }
@@ -151,7 +167,7 @@ PD_FN int bvh_query(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *left,
                     PD_GLOBAL const int *right, int n, const pd_real *q, PD_GLOBAL int *out,
                     int cap)
 {
-    return bvh_query_after(box, left, right, n, q, 0, -1, out, cap);
+    return bvh_query_after(box, left, right, n, q, 0, -1, 0, out, cap);
 }
 
 #endif /* PD_BVH_H */
