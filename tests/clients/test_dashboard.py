@@ -173,7 +173,10 @@ def main():
 
         # a longer job: live progress over SSE on the jobs page, then Cancel and Delete
         longer = json.loads(SCENARIO)
-        longer["time"]["duration"] = 0.02
+        # long enough (~1e6 steps) that no machine finishes it before the page sees it
+        # running with progress; it is cancelled below, so the length costs nothing
+        longer["time"]["duration"] = 1.0
+        longer["time"]["output_interval"] = 0.01
         longer["name"] = "longer-collision"
 
         def live():
