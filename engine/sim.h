@@ -59,7 +59,7 @@ typedef struct sim {
     /* pairs: current and last step's (history) */
     sim_pairs cur, old;
     int npairs, n_old;
-    cl_mem force, tq1, tq2, info, ids, second_list;
+    cl_mem force, point, info, ids, second_list;
     cl_mem second_count, second_off; /* per particle: contacts as second body, their offsets */
     size_t work_cap;                 /* capacity of the per-pair work arrays above */
     /* overlap scratch, per contact work-item */

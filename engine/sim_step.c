@@ -65,9 +65,9 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     }
     if (need > m->work_cap || !m->force) {
         size_t cap = need + need / 2 + 1024;
-        cl_mem *b[] = {&m->force, &m->tq1, &m->tq2, &m->info, &m->ids, &m->second_list};
-        size_t sz[] = {m->rs * 3, m->rs * 3, m->rs * 3, m->rs * 2, sizeof(int), sizeof(int)};
-        m->bytes += (double)(cap - m->work_cap) * (11 * m->rs + 2 * sizeof(int));
+        cl_mem *b[] = {&m->force, &m->point, &m->info, &m->ids, &m->second_list};
+        size_t sz[] = {m->rs * 3, m->rs * 3, m->rs * 2, sizeof(int), sizeof(int)};
+        m->bytes += (double)(cap - m->work_cap) * (8 * m->rs + 2 * sizeof(int));
         m->work_cap = 0;
         for (size_t i = 0; i < sizeof b / sizeof b[0]; i++) {
             if (*b[i]) clReleaseMemObject(*b[i]);
@@ -221,7 +221,7 @@ static int contacts(sim *m, pd_error *err)
     e |= ARG(k, a++, m->rlen);
     e |= ARG(k, a++, m->pts_cap);
     e |= ARG(k, a++, nwork);
-    cl_mem outs[] = {m->force, m->tq1, m->tq2, m->cur.spring, m->cur.kt, m->info};
+    cl_mem outs[] = {m->force, m->point, m->cur.spring, m->cur.kt, m->info};
     for (size_t i = 0; i < sizeof outs / sizeof outs[0]; i++)
         e |= ARG(k, a++, outs[i]);
     if (e != CL_SUCCESS) return arg_fail(err, "contact_forces");
@@ -263,8 +263,8 @@ static int gather(sim *m, pd_error *err)
     e |= ARG(k, a++, m->second_off);
     e |= ARG(k, a++, m->second_list);
     e |= ARG(k, a++, m->force);
-    e |= ARG(k, a++, m->tq1);
-    e |= ARG(k, a++, m->tq2);
+    e |= ARG(k, a++, m->point);
+    e |= ARG(k, a++, m->x);
     e |= ARG(k, a++, m->n);
     e |= ARG(k, a++, m->inv_m);
     e |= ARG(k, a++, m->size);

@@ -6,7 +6,7 @@
  * reals), so scratch memory follows the device's parallelism, not the number of pairs. Each pair
  * finds its tangential history by binary search in last step's sorted keys (contact_history.h).
  * The search is confined to the pair's first body's segment of last step's keys (old_offset).
- * Per pair out: force on the second body (3), torques about each body's centre (3 + 3), the new
+ * Per pair out: force on the second body (3), the contact point (3), the new
  * tangential spring (3) and stiffness (1), and info (2): touching flag and depth / size.
  */
 #include "pd_real.h"
@@ -23,9 +23,8 @@ contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *o
                __global const int *vt, __global const pd_real *unit_vol, __global const int *kind,
                __global const pd_real *radius_ratio, __global const pd_real *params, int nmat,
                int nparticles, pd_real dt, __global int *iscr, __global pd_real *rscr, int ilen,
-               int rlen, int pts_cap, int nwork, __global pd_real *force,
-               __global pd_real *tq_first, __global pd_real *tq_second, __global pd_real *spring,
-               __global pd_real *kt, __global pd_real *info)
+               int rlen, int pts_cap, int nwork, __global pd_real *force, __global pd_real *point,
+               __global pd_real *spring, __global pd_real *kt, __global pd_real *info)
 {
     int g = (int)get_global_id(0);
     if (g >= nwork) return;
@@ -64,8 +63,7 @@ contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *o
         cp_result r;
         cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, &r);
         v3_store(force, c, r.force);
-        v3_store(tq_first, c, r.tq_a);
-        v3_store(tq_second, c, r.tq_b);
+        v3_store(point, c, r.point);
         v3_store(spring, c, r.spring);
         kt[c] = r.kt;
         info[2 * c] = (pd_real)r.touching;

@@ -57,9 +57,9 @@ typedef struct cp_world {
     pd_real dt;
 } cp_world;
 
-/* What a pair yields: force on b (a gets minus it), torques about each centre, and stats. */
+/* What a pair yields: force on b (a gets minus it) at the contact point, and stats. */
 typedef struct cp_result {
-    pd_v3 force, tq_a, tq_b;
+    pd_v3 force;  /* on b, at point */
     pd_v3 spring; /* tangential history carried to the next step */
     pd_real kt;
     int touching;  /* bodies overlap (a contact) */
@@ -183,7 +183,7 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
     int wall_b = ib >= wd->nparticles;
     pd_real smin = wall_b ? a.size : pd_min(a.size, b.size);
 
-    res->force = res->tq_a = res->tq_b = res->spring = v3(0, 0, 0);
+    res->force = res->spring = v3(0, 0, 0);
     res->kt = 0;
     res->touching = 0;
     res->ratio = 0;
@@ -278,8 +278,6 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         f = v3_sub(f, v3_scale(n, kc * (delta + le)));
     res->force = f;
     res->point = c;
-    res->tq_a = v3_cross(v3_sub(c, a.x), v3_scale(f, -1));
-    res->tq_b = v3_cross(v3_sub(c, b.x), f);
 }
 
 #endif /* PD_CONTACT_PAIR_H */
