@@ -50,12 +50,17 @@ typedef struct sim {
     cl_mem L, inv_i, f, t;
     /* shapes and materials */
     cl_mem vert, tri, voff, toff, vt_off, vt, unit_vol, kind, radius_ratio, params;
+    /* walls' triangle BVHs (kernels/wall_bvh.h, engine/wall_tree.c) */
+    cl_mem wnode_box, wnode_kid, wnode_off, wtri_order;
+    int wall_cap; /* most triangles of one wall that can be near one particle */
     /* broad phase */
     cl_mem pbox, wbox, tbox, left, right, parent, arrivals, codes, idx, codes_tmp, idx_tmp;
     cl_mem count, offset, status;
     cl_mem cand; /* broad phase: the first 16 partners of each particle, found while counting */
-    cl_mem old_offset;     /* last step's offsets: where each particle's pairs begin in old.keys */
-    cl_int status_host[2]; /* [1]: lowest particle found not finite, INT_MAX when none */
+    cl_mem old_offset; /* last step's offsets: where each particle's pairs begin in old.keys */
+    /* [1]: lowest particle found not finite, [2]: lowest particle * nwall + wall with more
+     * wall triangles near it than wall_cap (kernels/contact_pair.h); INT_MAX when none */
+    cl_int status_host[3];
     /* pairs: current and last step's (history) */
     sim_pairs cur, old;
     int npairs, n_old;

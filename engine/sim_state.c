@@ -10,6 +10,7 @@
 #include "contact_pair.h" /* cp_* parameter layout, overlap scratch sizes, force-law helpers */
 #include "overlap_run.h"
 #include "sim.h"
+#include "wall_tree.h"
 
 static const double PI = 3.14159265358979323846;
 
@@ -140,6 +141,87 @@ done:
     return rc;
 }
 
+/*
+ * The walls' triangle BVHs (thesis section 5.6), built in each wall's frame from the shape tables
+ * (vert, tri; walls are shapes nshape ..), and wall_cap: the most triangles of one wall whose
+ * boxes can meet the cube np_wall_local searches around any particle (wall_tree_max_near, for
+ * the largest particle; allowing for the kernel's widening of the cube), which sizes the overlap
+ * scratch independently of the walls' triangle counts.
+ */
+static int upload_wall_trees(sim *m, const double *vert, const int *tri, const int *voff,
+                             const int *toff, pd_error *err)
+{
+    const pd_scenario *s = m->s;
+    int W = s->nwall, rc = PD_OK;
+    wall_tree *t = calloc((size_t)W + 1, sizeof *t);
+    int *noff = calloc((size_t)W + 1, sizeof(int));
+    if (!t || !noff) {
+        free(t);
+        free(noff);
+        return pd_error_set(err, PD_ENOMEM, "run: out of memory for the walls' trees");
+    }
+    /* the cube's half-side: the largest circumradius, widened as np_wall_local does, plus its
+     * rounding allowance at ten times the scene's largest coordinate */
+    double reach = 0, far = 0, eps = m->dbl ? 2.220446049250313e-16 : 1.1920929e-7;
+    for (long i = 0; i < m->p->n; i++) {
+        double r = s->shape[m->p->shape[i]].radius_ratio * m->p->size[i];
+        reach = r > reach ? r : reach;
+        for (int k = 0; k < 3; k++)
+            far = fmax(far, fabs(m->p->x[3 * i + k]));
+    }
+    for (int j = voff[s->nshape]; j < voff[s->nshape + W]; j++)
+        for (int k = 0; k < 3; k++)
+            far = fmax(far, fabs(vert[3 * j + k]));
+    double side = 2 * (reach * (1 + 2e-5) + 64 * eps * 10 * far);
+    m->wall_cap = 0;
+    for (int w = 0; w < W && rc == PD_OK; w++) {
+        int sh = s->nshape + w;
+        const double *v = vert + 3 * (size_t)voff[sh];
+        const int *tr = tri + 3 * (size_t)toff[sh];
+        int nt = toff[sh + 1] - toff[sh];
+        rc = wall_tree_build(v, tr, nt, &t[w], s->wall[w].name, err);
+        if (rc != PD_OK) break;
+        noff[w + 1] = noff[w] + t[w].nnode;
+        int near = wall_tree_max_near(&t[w], v, tr, nt, side);
+        if (near < 0) rc = pd_error_set(err, PD_ENOMEM, "run: out of memory for the walls' trees");
+        m->wall_cap = near > m->wall_cap ? near : m->wall_cap;
+    }
+    int nn = noff[W];
+    double *box = rc == PD_OK ? malloc(sizeof(double) * 6 * ((size_t)nn + 1)) : NULL;
+    int *kid = rc == PD_OK ? malloc(sizeof(int) * 2 * ((size_t)nn + 1)) : NULL;
+    int *order = rc == PD_OK ? calloc((size_t)toff[s->nshape + W] + 1, sizeof(int)) : NULL;
+    if (rc == PD_OK && (!box || !kid || !order))
+        rc = pd_error_set(err, PD_ENOMEM, "run: out of memory for the walls' trees");
+    if (rc == PD_OK) {
+        for (int w = 0; w < W; w++) {
+            memcpy(box + 6 * (size_t)noff[w], t[w].box, sizeof(double) * 6 * (size_t)t[w].nnode);
+            memcpy(kid + 2 * (size_t)noff[w], t[w].kid, sizeof(int) * 2 * (size_t)t[w].nnode);
+            int sh = s->nshape + w;
+            memcpy(order + toff[sh], t[w].order, sizeof(int) * (size_t)(toff[sh + 1] - toff[sh]));
+        }
+        cl_int e = CL_SUCCESS;
+        int ok = 1;
+        m->wnode_box = mk(m, m->rs * 6 * (size_t)nn, &ok, &e);
+        m->wnode_kid = mk(m, sizeof(int) * 2 * (size_t)nn, &ok, &e);
+        m->wnode_off = mk(m, sizeof(int) * ((size_t)W + 1), &ok, &e);
+        m->wtri_order = mk(m, sizeof(int) * ((size_t)toff[s->nshape + W] + 1), &ok, &e);
+        if (!ok) rc = CL_FAIL(err, "clCreateBuffer(wall trees)", e);
+        if (rc == PD_OK) rc = sim_write(m, m->wnode_box, 0, 6 * (size_t)nn, box, err);
+        if (rc == PD_OK) rc = write_ints(m, m->wnode_kid, 2 * (size_t)nn, kid, err);
+        if (rc == PD_OK) rc = write_ints(m, m->wnode_off, (size_t)W + 1, noff, err);
+        if (rc == PD_OK)
+            rc = write_ints(m, m->wtri_order, (size_t)toff[s->nshape + W] + 1, order, err);
+    }
+    for (int w = 0; w < W; w++)
+        wall_tree_free(&t[w]);
+    free(t);
+    free(noff);
+    free(box);
+    free(kid);
+    free(order);
+    return rc;
+}
+
 /* Shape tables: the scenario's shapes (size 1, body frame), then one per wall (metres, about
  * the wall's centroid). Also the largest triangle counts for the overlap scratch. */
 static int upload_shapes(sim *m, pd_error *err)
@@ -167,12 +249,12 @@ static int upload_shapes(sim *m, pd_error *err)
         int nt = mesh[i] && !kind[i] ? mesh[i]->ntris : 0;
         voff[i + 1] = voff[i] + nv;
         toff[i + 1] = toff[i] + nt;
-        if (i < s->nshape) {
+        if (i < s->nshape) { /* walls are met through their BVH: see upload_wall_trees */
             max_ta = nt > max_ta ? nt : max_ta;
             max_va = nv > max_va ? nv : max_va;
+            max_tb = nt > max_tb ? nt : max_tb;
+            max_vb = nv > max_vb ? nv : max_vb;
         }
-        max_tb = nt > max_tb ? nt : max_tb;
-        max_vb = nv > max_vb ? nv : max_vb;
     }
     vert = malloc(sizeof(double) * 3 * ((size_t)voff[ns] + 1));
     tri = malloc(sizeof(int) * 3 * ((size_t)toff[ns] + 1));
@@ -214,9 +296,18 @@ static int upload_shapes(sim *m, pd_error *err)
         free(list);
     }
     m->nshape = ns;
-    m->pts_cap = ovl_pts_cap(max_ta, max_tb);
+    if ((rc = upload_wall_trees(m, vert, tri, voff, toff, err)) != PD_OK) goto done;
+    /* overlap scratch: particle pairs, or a particle and a wall's part near it (wall_cap) */
+    int cap = m->wall_cap, cap_v = 3 * cap;
+    m->pts_cap = ovl_pts_cap(max_ta, max_tb > cap ? max_tb : cap);
     m->ilen = ovl_iscratch_len(max_ta, max_tb, max_va, max_vb);
     m->rlen = ovl_rscratch_len(max_va, max_vb, max_tb, m->pts_cap);
+    if (cap > 0) {
+        int il = np_wall_ilen(cap) + ovl_iscratch_len(max_ta, cap, max_va, cap_v);
+        int rl = np_wall_rlen(cap) + ovl_rscratch_len(max_va, cap_v, cap, m->pts_cap);
+        m->ilen = il > m->ilen ? il : m->ilen;
+        m->rlen = rl > m->rlen ? rl : m->rlen;
+    }
     cl_int e = CL_SUCCESS;
     int ok = 1;
     m->vert = mk(m, m->rs * 3 * (size_t)voff[ns], &ok, &e);
@@ -472,7 +563,7 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->old_offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->cand = mk(m, sizeof(int) * 16 * n, &ok, &e);
-    m->status = mk(m, sizeof(int) * 2, &ok, &e);
+    m->status = mk(m, sizeof(int) * 3, &ok, &e);
     m->second_count = mk(m, sizeof(int) * n, &ok, &e);
     m->second_off = mk(m, sizeof(int) * (n + 1), &ok, &e);
     if (!ok) {
@@ -504,7 +595,7 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
         rc = CL_FAIL(err, "clEnqueueFillBuffer(offsets)", e);
         goto fail;
     }
-    cl_int status0[2] = {0, 0x7fffffff}; /* INT_MAX: no particle found diverging */
+    cl_int status0[3] = {0, 0x7fffffff, 0x7fffffff}; /* INT_MAX: nothing found */
     e = clEnqueueWriteBuffer(dev->queue, m->status, CL_TRUE, 0, sizeof status0, status0, 0, NULL,
                              NULL);
     if (e != CL_SUCCESS) {
@@ -550,6 +641,10 @@ void sim_destroy(sim *m)
                       &m->kind,
                       &m->radius_ratio,
                       &m->params,
+                      &m->wnode_box,
+                      &m->wnode_kid,
+                      &m->wnode_off,
+                      &m->wtri_order,
                       &m->pbox,
                       &m->wbox,
                       &m->tbox,

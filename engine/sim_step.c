@@ -170,6 +170,14 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
                                 sizeof total, &total, 0, NULL, NULL);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(pair count)", e);
     if (total < 0) return pd_error_set(err, PD_ENOMEM, "run: more than 2^31 candidate pairs");
+    if (m->status_host[2] != INT_MAX) { /* last step's contacts: a wall too fine near a particle */
+        int code = m->status_host[2], wi = code % m->nwall;
+        return pd_error_set(err, PD_EINVAL,
+                            "run: step %lld: wall '%s' has more than %d triangles within the "
+                            "bounding cube of particle %d, beyond the bound computed from its "
+                            "mesh at the start (a particle far from the origin?)",
+                            m->step, m->s->wall[wi].name, m->wall_cap, code / m->nwall);
+    }
     if ((rc = ensure_pairs(m, total, err)) != PD_OK) return rc;
     m->npairs = total;
 
@@ -215,6 +223,12 @@ static int contacts(sim *m, pd_error *err)
     e |= ARG(k, a++, m->nmat);
     e |= ARG(k, a++, m->n);
     e |= arg_real(m, k, a++, m->dt);
+    cl_mem trees[] = {m->wnode_box, m->wnode_kid, m->wnode_off, m->wtri_order};
+    for (size_t i = 0; i < sizeof trees / sizeof trees[0]; i++)
+        e |= ARG(k, a++, trees[i]);
+    e |= ARG(k, a++, m->wall_cap);
+    e |= ARG(k, a++, m->nwall);
+    e |= ARG(k, a++, m->status);
     e |= ARG(k, a++, m->iscr);
     e |= ARG(k, a++, m->rscr);
     e |= ARG(k, a++, m->ilen);

@@ -6,6 +6,8 @@
  * reals), so scratch memory follows the device's parallelism, not the number of pairs. Each pair
  * finds its tangential history by binary search in last step's sorted keys (contact_history.h).
  * The search is confined to the pair's first body's segment of last step's keys (old_offset).
+ * A particle meets a wall's triangles found in the wall's BVH (wall_bvh.h, np_wall_local); a
+ * wall-pair work-item's scratch begins with np_wall_ilen/_rlen(wall_cap) for them.
  * Per pair out: force on the second body (3), the contact point (3), the new
  * tangential spring (3) and stiffness (1), and info (2): touching flag and depth / size.
  */
@@ -22,8 +24,11 @@ contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *o
                __global const int *voff, __global const int *toff, __global const int *vt_off,
                __global const int *vt, __global const pd_real *unit_vol, __global const int *kind,
                __global const pd_real *radius_ratio, __global const pd_real *params, int nmat,
-               int nparticles, pd_real dt, __global int *iscr, __global pd_real *rscr, int ilen,
-               int rlen, int pts_cap, int nwork, __global pd_real *force, __global pd_real *point,
+               int nparticles, pd_real dt, __global const pd_real *wnode_box,
+               __global const int *wnode_kid, __global const int *wnode_off,
+               __global const int *wtri_order, int wall_cap, int nwall, __global int *status,
+               __global int *iscr, __global pd_real *rscr, int ilen, int rlen, int pts_cap,
+               int nwork, __global pd_real *force, __global pd_real *point,
                __global pd_real *spring, __global pd_real *kt, __global pd_real *info)
 {
     int g = (int)get_global_id(0);
@@ -50,6 +55,13 @@ contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *o
     wd.nmat = nmat;
     wd.nparticles = nparticles;
     wd.dt = dt;
+    wd.wnode_box = wnode_box;
+    wd.wnode_kid = wnode_kid;
+    wd.wnode_off = wnode_off;
+    wd.wtri_order = wtri_order;
+    wd.wall_cap = wall_cap;
+    wd.nwall = nwall;
+    wd.status = status;
     __global int *is = iscr + (size_t)g * (size_t)ilen;
     __global pd_real *rs = rscr + (size_t)g * (size_t)rlen;
     for (int c = g; c < npairs; c += nwork) {

@@ -55,7 +55,22 @@ typedef struct cp_world {
     int nmat;
     int nparticles; /* bodies at and above are walls: body = nparticles + (key - CH_WALL) */
     pd_real dt;
+    /* the walls' triangle BVHs (wall_bvh.h): wall w's nodes from wnode_off[w]; the leaves'
+     * triangle order of a wall of shape s at wtri_order[toff[s] ..]; wall_cap: most triangles of
+     * one wall near one particle (np_wall_local's cap) */
+    PD_GLOBAL const pd_real *wnode_box;
+    PD_GLOBAL const int *wnode_kid, *wnode_off, *wtri_order;
+    int wall_cap;
+    /* status[2]: lowest particle * nwall + wall whose near wall triangles exceeded wall_cap */
+    PD_GLOBAL int *status;
+    int nwall;
 } cp_world;
+
+#ifdef __OPENCL_VERSION__
+#define CP_FLAG_MIN(p, v) atomic_min(p, v)
+#else
+#define CP_FLAG_MIN(p, v) (*(p) = *(p) < (v) ? *(p) : (v))
+#endif
 
 /* What a pair yields: force on b (a gets minus it) at the contact point, and stats. */
 typedef struct cp_result {
@@ -223,6 +238,21 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         ovl_in in;
         pd_real ra[9];
         np_setup(&wd->sh, &a, &b, 0, &in, ra);
+        if (wall_b) { /* the wall's triangles near a, from its BVH (thesis section 5.6) */
+            int wi = ib - wd->nparticles, n0 = wd->wnode_off[wi];
+            wb_tree t;
+            t.box = wd->wnode_box + 6 * n0;
+            t.kid = wd->wnode_kid + 2 * n0;
+            t.order = wd->wtri_order + wd->sh.toff[b.shape];
+            t.vert = in.vb;
+            t.tri = in.tb;
+            int nt = np_wall_local(&t, wd->radius_ratio[a.shape] * a.size, wd->wall_cap, iscr, rscr,
+                                   &in);
+            if (nt < 0) CP_FLAG_MIN(wd->status + 2, ia * wd->nwall + wi);
+            if (nt <= 0) return;
+            iscr += np_wall_ilen(wd->wall_cap);
+            rscr += np_wall_rlen(wd->wall_cap);
+        }
         in.iscr = iscr;
         in.rscr = rscr;
         in.pts_cap = pts_cap;

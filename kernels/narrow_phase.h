@@ -85,6 +85,72 @@ PD_FN void np_setup(const np_shapes *sh, const np_body *a, const np_body *b, int
     in->vol_a = sh->unit_vol[sa] * a->size * a->size * a->size;
     in->vol_b = sh->unit_vol[sb] * b->size * b->size * b->size;
     in->flags = flags;
+    wb_tree_none(&in->wall);
+}
+
+/* Scratch of np_wall_local ahead of the overlap's own, for a cap of local triangles. */
+PD_FN int np_wall_ilen(int cap)
+{
+    return 7 * cap; /* triangle ids, 3 vertex ids each, local triangles */
+}
+PD_FN int np_wall_rlen(int cap)
+{
+    return 9 * cap; /* up to 3 vertices per triangle */
+}
+
+/*
+ * Narrows in (set up by np_setup for a particle a against a wall, whose size is 1) to the wall's
+ * part near the particle (OVL_OPEN_B, overlap_predicates.h): the triangles of the wall's BVH whose
+ * boxes meet the cube of half-side reach (the particle's circumradius, m) about its centroid, with
+ * their vertices copied and renumbered into iscr/rscr (np_wall_ilen/_rlen(cap)). Triangles keep
+ * the wall's order and vertices their relative order, so canonical edges and the order of the
+ * cusps are those of the whole wall. Returns the number of local triangles (0: nothing of the wall
+ * near), or -1 when more than cap are near (the host sizes cap so that this cannot happen).
+ */
+PD_FN int np_wall_local(const wb_tree *w, pd_real reach, int cap, PD_GLOBAL int *iscr,
+                        PD_GLOBAL pd_real *rscr, ovl_in *in)
+{
+    const pd_real *R = in->rot, *t = in->tr;
+    /* a's centroid in the wall's frame: rot^T (0 - tr) */
+    pd_v3 o =
+        v3(-(R[0] * t[0] + R[3] * t[1] + R[6] * t[2]), -(R[1] * t[0] + R[4] * t[1] + R[7] * t[2]),
+           -(R[2] * t[0] + R[5] * t[1] + R[8] * t[2]));
+    /* widened well beyond the rounding of o (the host's cap allows for this widening) */
+    pd_real h = reach * (PD_R(1) + PD_R(1e-5)) + PD_R(64) * PD_EPS * v3_amax(o);
+    PD_GLOBAL int *lt = iscr, *lv = iscr + cap, *ltri = iscr + 4 * cap;
+    int nt = wb_query_box(w, v3_sub(o, v3(h, h, h)), v3_add(o, v3(h, h, h)), lt, cap);
+    if (nt < 0 || nt > cap) return -1;
+    if (nt == 0) return 0;
+    ovl_sort(lt, nt);
+    for (int k = 0; k < nt; k++)
+        for (int q = 0; q < 3; q++)
+            lv[3 * k + q] = w->tri[3 * lt[k] + q];
+    ovl_sort(lv, 3 * nt);
+    int nv = 0;
+    for (int k = 0; k < 3 * nt; k++)
+        if (nv == 0 || lv[k] != lv[nv - 1]) lv[nv++] = lv[k];
+    for (int k = 0; k < nt; k++)
+        for (int q = 0; q < 3; q++) {
+            int g = w->tri[3 * lt[k] + q], lo = 0, hi = nv - 1;
+            while (lo < hi) { /* lv is sorted and holds g */
+                int mid = (lo + hi) / 2;
+                if (lv[mid] < g)
+                    lo = mid + 1;
+                else
+                    hi = mid;
+            }
+            ltri[3 * k + q] = lo;
+        }
+    for (int k = 0; k < nv; k++)
+        v3_store(rscr, k, v3_load(w->vert, lv[k]));
+    in->wall = *w;
+    in->vb = rscr;
+    in->tb = ltri;
+    in->nvb = nv;
+    in->ntb = nt;
+    in->vt_b_off = in->vt_b = 0;
+    in->flags |= OVL_OPEN_B;
+    return nt;
 }
 
 /* The overlap's centroid and normal from a's body frame to world coordinates. */

@@ -41,6 +41,7 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
     in.vol_a = vol_a;
     in.vol_b = vol_b;
     in.flags = flags;
+    wb_tree_none(&in.wall);
     in.iscr = iscr + (size_t)g * (size_t)ovl_iscratch_len(nta, ntb, nva, nvb);
     in.rscr = rscr + (size_t)g * (size_t)ovl_rscratch_len(nva, nvb, ntb, pts_cap);
     in.pts_cap = pts_cap;

@@ -294,6 +294,7 @@ PD_FN void ovl_pass(ovl_ctx *c)
     PD_GLOBAL const int *tb = c->in->tb;
     c->vol = PD_R(0);
     c->moment = c->area_a = c->area_b = v3(0, 0, 0);
+    c->origin_in_b = -1; /* its ties follow c->flip */
     /* only the kept triangles' corners are ever tested */
     for (int k = 0; k < c->ka; k++)
         for (int q = 0; q < 3; q++)
@@ -317,6 +318,10 @@ PD_FN void ovl_pass(ovl_ctx *c)
             ovl_cusp(c, T.p[q], T.e[q], T.m[q], T.nu, 0);
             ovl_cusp(c, T.p[q], v3_scale(T.e[qp], PD_R(-1)), T.m[qp], T.nu, 0);
         }
+        /* T beside all of B's near triangles meets none of them */
+        if (T.hi.x < c->nblo.x || c->nbhi.x < T.lo.x || T.hi.y < c->nblo.y || c->nbhi.y < T.lo.y ||
+            T.hi.z < c->nblo.z || c->nbhi.z < T.lo.z)
+            continue;
         for (int l = 0; l < c->nb; l++) {
             PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
             /* box first, from the cache: most pairs end here */
@@ -420,6 +425,8 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->flip = c->degenerate = c->depth_mode = 0;
     c->pad = c->tol2 = c->tol3 = PD_R(0);
     c->ka = c->kb = c->na = c->nb = 0;
+    c->origin_in_b = -1;
+    int open_b = (in->flags & OVL_OPEN_B) != 0;
 
     /* eq. 5.3: the direction between the centres */
     pd_v3 dc = v3_sub(in->cb, in->ca);
@@ -454,14 +461,17 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->e1 += pad;
     c->e2 -= pad;
     c->pad = pad;
+    /* B open: its local part's lowest vertex does not bound the wall's solid inside A's cube, so
+     * A is not filtered (every A triangle kept); B's triangles still must reach below e1 */
+    if (open_b) c->e2 = -PD_REAL_MAX;
     if (c->filter && !(c->e1 > c->e2)) { /* half-planes disjoint: no volume */
         ovl_miss(o, c);
         return;
     }
-    if (c->filter && in->vt_a_off && in->vt_b_off) {
-        /* A triangle is kept from its first corner that reaches into the other's half-plane, so
-         * each is listed once; the lists are sorted so that the cusps are summed in the same
-         * order as without the filter (identical results). */
+    /* A triangle is kept from its first corner that reaches into the other's half-plane, so
+     * each is listed once; the lists are sorted so that the cusps are summed in the same order
+     * as without the filter (identical results). */
+    if (c->filter && in->vt_a_off && !open_b) {
         for (int i = 0; i < in->nva; i++) {
             if (!(c->proj_a[i] >= c->e2)) continue;
             for (int k = in->vt_a_off[i]; k < in->vt_a_off[i + 1]; k++) {
@@ -474,6 +484,15 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
                 if (first) c->kept_a[c->ka++] = t;
             }
         }
+        ovl_sort(c->kept_a, c->ka);
+    } else {
+        for (int t = 0; t < in->nta; t++) {
+            PD_GLOBAL const int *v = in->ta + 3 * t;
+            pd_real mx = pd_max(pd_max(c->proj_a[v[0]], c->proj_a[v[1]]), c->proj_a[v[2]]);
+            if (!c->filter || mx >= c->e2) c->kept_a[c->ka++] = t;
+        }
+    }
+    if (c->filter && in->vt_b_off) {
         for (int j = 0; j < in->nvb; j++) {
             if (!(c->proj_b[j] <= c->e1)) continue;
             for (int k = in->vt_b_off[j]; k < in->vt_b_off[j + 1]; k++) {
@@ -486,14 +505,8 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
                 if (first) c->kept_b[c->kb++] = u;
             }
         }
-        ovl_sort(c->kept_a, c->ka);
         ovl_sort(c->kept_b, c->kb);
     } else {
-        for (int t = 0; t < in->nta; t++) {
-            PD_GLOBAL const int *v = in->ta + 3 * t;
-            pd_real mx = pd_max(pd_max(c->proj_a[v[0]], c->proj_a[v[1]]), c->proj_a[v[2]]);
-            if (!c->filter || mx >= c->e2) c->kept_a[c->ka++] = t;
-        }
         for (int u = 0; u < in->ntb; u++) {
             PD_GLOBAL const int *v = in->tb + 3 * u;
             pd_real mn = pd_min(pd_min(c->proj_b[v[0]], c->proj_b[v[1]]), c->proj_b[v[2]]);
@@ -554,6 +567,10 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
                    pd_max(alo.z, blo.z) - c->pad);
     c->box_hi = v3(pd_min(ahi.x, bhi.x) + c->pad, pd_min(ahi.y, bhi.y) + c->pad,
                    pd_min(ahi.z, bhi.z) + c->pad);
+    if (open_b) { /* the wall's solid reaches beyond its local triangles' box: A's box bounds */
+        c->box_lo = c->alo;
+        c->box_hi = c->ahi;
+    }
     if (c->filter &&
         (c->box_lo.x > c->box_hi.x || c->box_lo.y > c->box_hi.y || c->box_lo.z > c->box_hi.z)) {
         ovl_miss(o, c);
@@ -566,12 +583,18 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
                      ovl_va(c, in->ta[3 * t + 2]), PD_R(0));
         if (!c->filter || ovl_box_meets(c, &T)) c->near_a[c->na++] = t;
     }
+    c->nblo = v3(PD_REAL_MAX, PD_REAL_MAX, PD_REAL_MAX);
+    c->nbhi = v3_scale(c->nblo, PD_R(-1));
     for (int l = 0; l < c->kb; l++) {
         int u = c->kept_b[l];
         ovl_tri U;
         ovl_tri_make(&U, ovl_vb(c, in->tb[3 * u]), ovl_vb(c, in->tb[3 * u + 1]),
                      ovl_vb(c, in->tb[3 * u + 2]), PD_R(0));
         if (c->filter && !ovl_box_meets(c, &U)) continue;
+        c->nblo = v3(pd_min(c->nblo.x, U.lo.x - c->pad), pd_min(c->nblo.y, U.lo.y - c->pad),
+                     pd_min(c->nblo.z, U.lo.z - c->pad));
+        c->nbhi = v3(pd_max(c->nbhi.x, U.hi.x + c->pad), pd_max(c->nbhi.y, U.hi.y + c->pad),
+                     pd_max(c->nbhi.z, U.hi.z + c->pad));
         /* cache what the pair loop needs of U, with the box padded by the resolution */
         ovl_tri_edges(&U);
         PD_GLOBAL pd_real *uc = c->ucache + OVL_TRI_CACHE * c->nb;

@@ -28,8 +28,20 @@
 #define PD_OVERLAP_PREDICATES_H
 
 #include "pd_real.h"
+#include "wall_bvh.h"
 
 #define OVL_NO_FILTER 2 /* same value as PD_OVERLAP_NO_FILTER */
+/*
+ * B is open: the part of a closed wall that meets a box around A (the wall's triangles whose boxes
+ * meet the cube of A's circumradius about its centroid), with its vertices numbered in the whole
+ * wall's order. Everything but one test needs only that part: a node of A n B lies on A, so in
+ * the cube. The exception is whether a vertex of A lies inside the wall, a question about the
+ * whole solid; it is answered by the parity of the segment from the vertex to A's centroid (the
+ * origin of A's frame, inside the cube with the segment) through the local triangles, combined
+ * with whether the centroid is inside, found once by a ray through the whole wall's BVH (in.wall).
+ * Set by np_wall_local (narrow_phase.h).
+ */
+#define OVL_OPEN_B 4
 /* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals. */
 #define OVL_TRI_CACHE 18
 
@@ -54,6 +66,7 @@ typedef struct ovl_in {
     PD_GLOBAL int *iscr;     /* ovl_iscratch_len ints */
     PD_GLOBAL pd_real *rscr; /* ovl_rscratch_len reals */
     int pts_cap;             /* capacity for overlap nodes kept for the depth */
+    wb_tree wall;            /* OVL_OPEN_B only: the whole wall, B's frame (B's size must be 1) */
 } ovl_in;
 
 typedef struct ovl_out {
@@ -91,6 +104,8 @@ typedef struct ovl_ctx {
     PD_GLOBAL int *kept_a, *kept_b, *near_a, *near_b, *st_a, *st_b;
     pd_v3 box_lo, box_hi;     /* box of A's kept part n box of B's kept part, padded */
     pd_v3 alo, ahi, blo, bhi; /* boxes of A's and B's kept parts, padded */
+    pd_v3 nblo, nbhi;         /* box of B's near triangles (the pair loop's), padded */
+    int origin_in_b;          /* OVL_OPEN_B: A's centroid inside the wall; -1 not yet known */
     PD_GLOBAL pd_real *proj_a, *proj_b, *vat, *vbt, *pts, *ucache;
     int npts, pts_overflow, store_pts;
     pd_real pad;        /* OVL_SNAP * L: the configuration's length resolution */
@@ -220,6 +235,51 @@ PD_FN int ovl_in_box(const ovl_ctx *c, pd_v3 p)
 }
 
 /*
+ * Whether the line through p along unit r passes through the triangle with corners v[] and vertex
+ * indices id[]: the line turns the same way about all three edges. Each edge is evaluated in its
+ * canonical orientation (lower index first), so the two triangles of an edge agree exactly. p is
+ * a point of the solid displaced by sp eps w relative to the triangle's (see ovl_ray_parity).
+ */
+PD_FN int ovl_line_through(ovl_ctx *c, pd_v3 p, pd_v3 r, pd_real sp, const pd_v3 v[3],
+                           const int id[3])
+{
+    int sg[3] = {0, 0, 0};
+    for (int e = 0; e < 3; e++) {
+        if (e > 0 && sg[e - 1] != sg[0]) return 0; /* turns differ: the line misses */
+        int e1 = (e + 1) % 3;
+        int k0 = id[e], k1 = id[e1];
+        pd_v3 b0 = k0 < k1 ? v[e] : v[e1], b1 = k0 < k1 ? v[e1] : v[e];
+        /* det(r, b0 - q, b1 - q) for q = p + sp eps w: eps term -sp w . ((b1 - b0) x r) */
+        int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), v3_sub(b1, p)), c->tol2);
+        if (!sv) sv = ovl_tie(c, v3_scale(v3_cross(v3_sub(b1, b0), r), -sp));
+        sg[e] = k0 < k1 ? sv : -sv;
+    }
+    return sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2];
+}
+
+/* Side of point p (displaced by sp eps w) against the plane through v0 with raw normal n. */
+PD_FN int ovl_point_side(ovl_ctx *c, pd_v3 p, pd_v3 v0, pd_v3 n, pd_real sp)
+{
+    /* (p - v0) . n with p displaced by sp eps w: eps term sp w . n */
+    int s = ovl_sign(v3_dot(v3_sub(p, v0), n), c->tol3);
+    return s ? s : ovl_tie(c, v3_scale(n, sp));
+}
+
+/* Whether the ray from p along unit r crosses the triangle v[] (ids id[]); sp as above. */
+PD_FN int ovl_ray_crosses(ovl_ctx *c, pd_v3 p, pd_v3 r, pd_real sp, const pd_v3 v[3],
+                          const int id[3])
+{
+    pd_v3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
+    pd_real rn = v3_dot(r, n);
+    /* a ray parallel to the plane, to within rounding, never crosses it (exactly parallel it
+     * would cross only if it lay in the plane, which the perturbation rules out) */
+    if (PD_FABS(rn) <= c->tol2) return 0;
+    int s = ovl_point_side(c, p, v[0], n, sp);
+    if ((s > 0) != (rn < PD_R(0))) return 0; /* plane behind the ray's start */
+    return ovl_line_through(c, p, r, sp, v, id);
+}
+
+/*
  * Point-in-solid test by ray parity: whether p lies inside the solid whose kept triangles are
  * tri[kept[0..nk)] over vertices vx (A's frame) and whose kept part lies in the box [lo, hi],
  * counting crossings of the ray from p along sp d (all it can meet are kept, by the half-plane
@@ -236,31 +296,94 @@ PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, PD_GLOBAL const int *tri, PD_GLOBA
     int odd = 0;
     for (int k = 0; k < nk; k++) {
         int t = kept[k];
-        int i0 = tri[3 * t], i1 = tri[3 * t + 1], i2 = tri[3 * t + 2];
-        pd_v3 v0 = v3_load(vx, i0), v1 = v3_load(vx, i1), v2 = v3_load(vx, i2);
-        if (c->filter && !ovl_tri_meets(v0, v1, v2, rlo, rhi)) continue;
-        pd_v3 n = v3_cross(v3_sub(v1, v0), v3_sub(v2, v0));
-        pd_real rn = v3_dot(r, n);
-        /* a ray parallel to the plane, to within rounding, never crosses it (exactly parallel
-         * it would cross only if it lay in the plane, which the perturbation rules out) */
-        if (PD_FABS(rn) <= c->tol2) continue;
-        /* side of p: (p - v0) . n with p displaced by sp eps w: eps term sp w . n */
-        int s = ovl_sign(v3_dot(v3_sub(p, v0), n), c->tol3);
-        if (!s) s = ovl_tie(c, v3_scale(n, sp));
-        if ((s > 0) != (rn < PD_R(0))) continue; /* plane behind the ray's start */
-        int idx[3] = {i0, i1, i2};
-        int sg[3] = {0, 0, 0};
-        for (int e = 0; e < 3; e++) {
-            if (e > 0 && sg[e - 1] != sg[0]) break; /* turns differ: the ray misses */
-            int k0 = idx[e], k1 = idx[(e + 1) % 3];
-            int lo = k0 < k1 ? k0 : k1, hi = k0 < k1 ? k1 : k0;
-            pd_v3 b0 = v3_load(vx, lo), b1 = v3_load(vx, hi);
-            /* det(r, b0 - q, b1 - q) for q = p + sp eps w: eps term -sp w . ((b1 - b0) x r) */
-            int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), v3_sub(b1, p)), c->tol2);
-            if (!sv) sv = ovl_tie(c, v3_scale(v3_cross(v3_sub(b1, b0), r), -sp));
-            sg[e] = k0 < k1 ? sv : -sv;
+        int id[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
+        pd_v3 v[3] = {v3_load(vx, id[0]), v3_load(vx, id[1]), v3_load(vx, id[2])};
+        if (c->filter && !ovl_tri_meets(v[0], v[1], v[2], rlo, rhi)) continue;
+        odd ^= ovl_ray_crosses(c, p, r, sp, v, id);
+    }
+    return odd;
+}
+
+/* B's vertex x (B's frame) in A's frame. */
+PD_FN pd_v3 ovl_b_to_a(const ovl_in *in, pd_v3 x)
+{
+    return v3(in->rot[0] * x.x + in->rot[1] * x.y + in->rot[2] * x.z + in->tr[0],
+              in->rot[3] * x.x + in->rot[4] * x.y + in->rot[5] * x.z + in->tr[1],
+              in->rot[6] * x.x + in->rot[7] * x.y + in->rot[8] * x.z + in->tr[2]);
+}
+
+/*
+ * OVL_OPEN_B: whether A's centroid (the origin) lies inside the whole wall, by the parity of a
+ * ray along -d through the wall's BVH. The tree is searched in the wall's frame (the ray mapped
+ * back by rot^T, exact to rounding for a wall of size 1, with the boxes widened well beyond that
+ * rounding); each triangle it may cross is mapped into A's frame exactly as ovl_compute maps B's
+ * vertices and decided by the same predicates as any other crossing.
+ */
+PD_FN int ovl_origin_in_b(ovl_ctx *c)
+{
+    if (c->origin_in_b >= 0) return c->origin_in_b;
+    const ovl_in *in = c->in;
+    const wb_tree *w = &in->wall;
+    const pd_real *R = in->rot;
+    pd_v3 r = v3_scale(c->d, PD_R(-1)), p = v3(0, 0, 0);
+    pd_v3 o = v3(-(R[0] * in->tr[0] + R[3] * in->tr[1] + R[6] * in->tr[2]),
+                 -(R[1] * in->tr[0] + R[4] * in->tr[1] + R[7] * in->tr[2]),
+                 -(R[2] * in->tr[0] + R[5] * in->tr[1] + R[8] * in->tr[2]));
+    pd_v3 rw = v3(R[0] * r.x + R[3] * r.y + R[6] * r.z, R[1] * r.x + R[4] * r.y + R[7] * r.z,
+                  R[2] * r.x + R[5] * r.y + R[8] * r.z);
+    PD_GLOBAL const pd_real *root = w->box;
+    pd_real ext = pd_max(v3_amax(o), pd_max(v3_amax(v3(root[0], root[1], root[2])),
+                                            v3_amax(v3(root[3], root[4], root[5]))));
+    pd_real pad = PD_R(1024) * PD_EPS * ext + c->pad;
+    int stack[WB_STACK], sp = 0, odd = 0;
+    if (wb_ray_meets(root, o, rw, pad)) stack[sp++] = 0;
+    while (sp > 0) {
+        int k = stack[--sp];
+        int k0 = w->kid[2 * k], k1 = w->kid[2 * k + 1];
+        if (k0 >= 0) {
+            if (sp + 2 > WB_STACK) break; /* the builder bounds the depth; never taken */
+            if (wb_ray_meets(w->box + 6 * k1, o, rw, pad)) stack[sp++] = k1;
+            if (wb_ray_meets(w->box + 6 * k0, o, rw, pad)) stack[sp++] = k0;
+            continue;
         }
-        if (sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2]) odd ^= 1;
+        for (int i = -1 - k0; i < -1 - k0 + k1; i++) {
+            int t = w->order[i];
+            int id[3] = {w->tri[3 * t], w->tri[3 * t + 1], w->tri[3 * t + 2]};
+            pd_v3 v[3];
+            for (int q = 0; q < 3; q++)
+                v[q] = ovl_b_to_a(in, v3_load(w->vert, id[q]));
+            odd ^= ovl_ray_crosses(c, p, r, PD_R(-1), v, id);
+        }
+    }
+    c->origin_in_b = odd;
+    return odd;
+}
+
+/*
+ * OVL_OPEN_B: whether A's point p lies inside the wall: the centroid's answer, flipped by every
+ * local triangle the segment from p to the centroid crosses (all such triangles are local: the
+ * segment lies in A's circumsphere, so in the cube the local part was taken from).
+ */
+PD_FN int ovl_open_inside_b(ovl_ctx *c, pd_v3 p)
+{
+    int odd = ovl_origin_in_b(c);
+    pd_real len = v3_norm(p);
+    if (!(len > PD_R(0))) return odd;
+    pd_v3 r = v3_scale(p, PD_R(-1) / len), o = v3(0, 0, 0);
+    pd_v3 slo = v3(pd_min(p.x, 0) - c->pad, pd_min(p.y, 0) - c->pad, pd_min(p.z, 0) - c->pad);
+    pd_v3 shi = v3(pd_max(p.x, 0) + c->pad, pd_max(p.y, 0) + c->pad, pd_max(p.z, 0) + c->pad);
+    PD_GLOBAL const int *tri = c->in->tb;
+    for (int k = 0; k < c->kb; k++) {
+        int t = c->kept_b[k];
+        int id[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
+        pd_v3 v[3] = {ovl_vb(c, id[0]), ovl_vb(c, id[1]), ovl_vb(c, id[2])};
+        if (!ovl_tri_meets(v[0], v[1], v[2], slo, shi)) continue;
+        pd_v3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
+        if (PD_FABS(v3_dot(r, n)) <= c->tol2) continue; /* parallel: as in ovl_ray_crosses */
+        /* both ends are A's points: the segment crosses the plane when they lie on either side */
+        if (ovl_point_side(c, p, v[0], n, PD_R(-1)) == ovl_point_side(c, o, v[0], n, PD_R(-1)))
+            continue;
+        odd ^= ovl_line_through(c, p, r, PD_R(-1), v, id);
     }
     return odd;
 }
@@ -269,6 +392,7 @@ PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, PD_GLOBAL const int *tri, PD_GLOBA
 PD_FN int ovl_inside_b(ovl_ctx *c, int i)
 {
     pd_v3 p = ovl_va(c, i);
+    if (c->in->flags & OVL_OPEN_B) return ovl_open_inside_b(c, p);
     if (c->filter && c->proj_a[i] < c->e2) return 0; /* below B's half-plane: outside */
     if (c->filter && !ovl_in_box(c, p)) return 0;    /* outside the box where A n B lies */
     return ovl_ray_parity(c, p, c->in->tb, c->kept_b, c->kb, c->vbt, PD_R(-1), c->blo, c->bhi);

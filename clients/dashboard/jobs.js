@@ -52,9 +52,18 @@ async function refresh() {
   follow();
 }
 
+// An ended job never runs again, so a copy fetched before its end (a list or a cancel
+// response answered after the stream reported the end) must not bring back its Cancel button:
+// that would cancel a finished job (409) where the user wanted Delete.
+function notOlder(j) {
+  const old = state.jobs.get(j.id);
+  return old && FINISHED.includes(old.status) && !FINISHED.includes(j.status) ? old : j;
+}
+
 // A streamed job may be newer than the list's copy: keep the furthest progress.
 function mergeKnown(j) {
   const old = state.jobs.get(j.id);
+  if (notOlder(j) !== j) return old;
   if (old && state.streams.has(j.id) && !FINISHED.includes(j.status)) {
     const a = (old.progress && old.progress.step) || 0;
     const b = (j.progress && j.progress.step) || 0;
@@ -152,7 +161,7 @@ async function act(j, what) {
   try {
     if (what === 'cancel') {
       const r = await api(jobPath(j.id, '/cancel'), { method: 'POST' });
-      if (r && r.id) state.jobs.set(j.id, r);
+      if (r && r.id) state.jobs.set(j.id, notOlder(r));
     } else {
       await api(jobPath(j.id), { method: 'DELETE' });
       state.jobs.delete(j.id);

@@ -13,8 +13,7 @@
 #include "overlap_run.h"
 #include "polydem.h"
 #include "test.h"
-
-static const double PI = 3.14159265358979323846;
+#include "unit_shape.h"
 
 static uint64_t rs = 7;
 static double rnd(void)
@@ -26,21 +25,6 @@ static double rnd(void)
 }
 
 enum { NSHAPE = 3, NBODY = 24 };
-
-/* A built-in in its body frame at volume-equivalent diameter 1 (as scenarios store shapes). */
-static pd_mesh *unit_shape(const char *name, int tris)
-{
-    pd_mesh *m = NULL;
-    pd_error err = {0};
-    if (pd_mesh_builtin(name, tris, 1, &m, &err) != PD_OK) return NULL;
-    pd_mass_props mp;
-    double rot[3][3];
-    pd_mesh_to_body_frame(m, &mp, rot);
-    double k = cbrt(PI / 6 / mp.volume);
-    for (int i = 0; i < 3 * m->nverts; i++)
-        m->verts[i] *= k;
-    return m;
-}
 
 TEST(pairs_match_overlap_of_posed_scaled_meshes)
 {
