@@ -164,7 +164,8 @@ static int upload_wall_trees(sim *m, const double *vert, const int *tri, const i
      * rounding allowance at ten times the scene's largest coordinate */
     double reach = 0, far = 0, eps = m->dbl ? 2.220446049250313e-16 : 1.1920929e-7;
     for (long i = 0; i < m->p->n; i++) {
-        double r = s->shape[m->p->shape[i]].radius_ratio * m->p->size[i];
+        /* spheres reach their cohesion range beyond (margin: half the largest) */
+        double r = s->shape[m->p->shape[i]].radius_ratio * m->p->size[i] + 2 * m->margin;
         reach = r > reach ? r : reach;
         for (int k = 0; k < 3; k++)
             far = fmax(far, fabs(m->p->x[3 * i + k]));

@@ -97,6 +97,17 @@ PD_FN void cp_load_body(const cp_world *wd, int i, np_body *b)
     b->shape = wd->shape[i];
 }
 
+/* The BVH of wall body ib (of shape sh). */
+PD_FN void cp_wall_tree(const cp_world *wd, int ib, int sh, wb_tree *t)
+{
+    int n0 = wd->wnode_off[ib - wd->nparticles];
+    t->box = wd->wnode_box + 6 * n0;
+    t->kid = wd->wnode_kid + 2 * n0;
+    t->order = wd->wtri_order + wd->sh.toff[sh];
+    t->vert = wd->sh.vert + 3 * wd->sh.voff[sh];
+    t->tri = wd->sh.tri + 3 * wd->sh.toff[sh];
+}
+
 /* Closest point to p on triangle (a, b, c) (Ericson, Real-Time Collision Detection 5.1.5). */
 PD_FN pd_v3 cp_closest_on_triangle(pd_v3 p, pd_v3 a, pd_v3 b, pd_v3 c)
 {
@@ -130,11 +141,34 @@ PD_FN pd_real cp_solid_angle(pd_v3 a, pd_v3 b, pd_v3 c)
 }
 
 /*
+ * Whether point p (a wall's frame) lies inside the wall of tree w, by ray parity through the tree
+ * with the overlap's robust predicates (overlap_predicates.h), at the resolution of coordinates
+ * of p's and the wall's magnitude. The ray's direction is fixed and generic.
+ */
+PD_FN int cp_inside_tree(const wb_tree *w, pd_v3 p)
+{
+    ovl_ctx c;
+    PD_GLOBAL const pd_real *b = w->box;
+    pd_real l =
+        pd_max(v3_amax(p), pd_max(v3_amax(v3(b[0], b[1], b[2])), v3_amax(v3(b[3], b[4], b[5]))));
+    c.pad = OVL_SNAP * l;
+    c.tol2 = c.pad * l;
+    c.tol3 = c.tol2 * l;
+    c.flip = c.degenerate = 0;
+    pd_v3 r = v3_unit(v3(PD_R(0.5772156649), PD_R(0.6180339887), PD_R(0.5336)));
+    return ovl_tree_parity(&c, w, 0, p, r, p, r);
+}
+
+/*
  * Sphere (centre s, radius r, world) against mesh body m. Returns the overlap delta (negative:
  * the gap), the unit normal from the sphere into the mesh and the closest surface point (world).
+ * With tree (m a wall, size 1), only the wall's triangles within `reach` of the centre are
+ * searched (their ids into iscr, up to cap; *overflow set when more), inside or outside by a ray
+ * through the tree; none within reach: no contact (-PD_REAL_MAX).
  */
-PD_FN pd_real cp_sphere_mesh(const cp_world *wd, pd_v3 s, pd_real r, const np_body *m, pd_v3 *n,
-                             pd_v3 *surf)
+PD_FN pd_real cp_sphere_mesh(const cp_world *wd, pd_v3 s, pd_real r, const np_body *m,
+                             const wb_tree *tree, pd_real reach, PD_GLOBAL int *iscr, int cap,
+                             int *overflow, pd_v3 *n, pd_v3 *surf)
 {
     pd_real R[9];
     np_quat_matrix(m->q, R);
@@ -148,9 +182,16 @@ PD_FN pd_real cp_sphere_mesh(const cp_world *wd, pd_v3 s, pd_real r, const np_bo
     PD_GLOBAL const pd_real *vert = wd->sh.vert + 3 * wd->sh.voff[sh];
     PD_GLOBAL const int *tri = wd->sh.tri + 3 * wd->sh.toff[sh];
     int nt = wd->sh.toff[sh + 1] - wd->sh.toff[sh];
+    if (tree) {
+        pd_real h = reach * (PD_R(1) + PD_R(1e-5)) + PD_R(64) * PD_EPS * v3_amax(p);
+        nt = wb_query_box(tree, v3_sub(p, v3(h, h, h)), v3_add(p, v3(h, h, h)), iscr, cap);
+        if (nt < 0 || nt > cap) *overflow = 1;
+        if (nt <= 0 || nt > cap) return -PD_REAL_MAX;
+    }
     pd_real best = PD_REAL_MAX, omega = 0;
     pd_v3 cbest = p, fnormal = v3(0, 0, 1);
-    for (int t = 0; t < nt; t++) {
+    for (int k = 0; k < nt; k++) {
+        int t = tree ? iscr[k] : k;
         pd_v3 a = v3_load(vert, tri[3 * t]), b = v3_load(vert, tri[3 * t + 1]),
               c = v3_load(vert, tri[3 * t + 2]);
         pd_v3 cp = cp_closest_on_triangle(p, a, b, c), dd = v3_sub(cp, p);
@@ -160,9 +201,10 @@ PD_FN pd_real cp_sphere_mesh(const cp_world *wd, pd_v3 s, pd_real r, const np_bo
             cbest = cp;
             fnormal = v3_cross(v3_sub(b, a), v3_sub(c, a));
         }
-        omega += cp_solid_angle(v3_sub(a, p), v3_sub(b, p), v3_sub(c, p));
+        if (!tree) omega += cp_solid_angle(v3_sub(a, p), v3_sub(b, p), v3_sub(c, p));
     }
-    int inside = PD_FABS(omega) > PD_R(6.283185307179586); /* winding number 1 vs 0 */
+    /* winding number 1 vs 0 over a particle's few triangles; a wall's by its tree */
+    int inside = tree ? cp_inside_tree(tree, p) : PD_FABS(omega) > PD_R(6.283185307179586);
     pd_v3 dv = v3_sub(cbest, p);
     pd_real dist = v3_norm(dv) * m->size;
     pd_v3 nb; /* body frame, from the sphere into the mesh */
@@ -222,7 +264,12 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         const np_body *sp = sa ? &a : &b, *me = sa ? &b : &a;
         pd_real r = PD_R(0.5) * sp->size;
         pd_v3 ns, surf;
-        delta = cp_sphere_mesh(wd, sp->x, r, me, &ns, &surf);
+        wb_tree t;
+        int overflow = 0;
+        if (wall_b) cp_wall_tree(wd, ib, b.shape, &t);
+        delta = cp_sphere_mesh(wd, sp->x, r, me, wall_b ? &t : 0, r + pr[CP_LE], iscr, wd->wall_cap,
+                               &overflow, &ns, &surf);
+        if (overflow) CP_FLAG_MIN(wd->status + 2, ia * wd->nwall + (ib - wd->nparticles));
         n = sa ? ns : v3_scale(ns, -1);
         c = v3_add(sp->x, v3_scale(ns, r - PD_R(0.5) * delta));
         rstar = r;
@@ -239,13 +286,9 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         pd_real ra[9];
         np_setup(&wd->sh, &a, &b, 0, &in, ra);
         if (wall_b) { /* the wall's triangles near a, from its BVH (thesis section 5.6) */
-            int wi = ib - wd->nparticles, n0 = wd->wnode_off[wi];
+            int wi = ib - wd->nparticles;
             wb_tree t;
-            t.box = wd->wnode_box + 6 * n0;
-            t.kid = wd->wnode_kid + 2 * n0;
-            t.order = wd->wtri_order + wd->sh.toff[b.shape];
-            t.vert = in.vb;
-            t.tri = in.tb;
+            cp_wall_tree(wd, ib, b.shape, &t);
             int nt = np_wall_local(&t, wd->radius_ratio[a.shape] * a.size, wd->wall_cap, iscr, rscr,
                                    &in);
             if (nt < 0) CP_FLAG_MIN(wd->status + 2, ia * wd->nwall + wi);

@@ -313,25 +313,18 @@ PD_FN pd_v3 ovl_b_to_a(const ovl_in *in, pd_v3 x)
 }
 
 /*
- * OVL_OPEN_B: whether A's centroid (the origin) lies inside the whole wall, by the parity of a
- * ray along -d through the wall's BVH. The tree is searched in the wall's frame (the ray mapped
- * back by rot^T, exact to rounding for a wall of size 1, with the boxes widened well beyond that
- * rounding); each triangle it may cross is mapped into A's frame exactly as ovl_compute maps B's
- * vertices and decided by the same predicates as any other crossing.
+ * Parity of the ray from p along unit r (a point of the solid displaced by -eps w, as A's) through
+ * the triangles of tree w: whether p lies inside the tree's closed mesh. The tree is searched in
+ * its own frame, where the ray is (pw, rw) (the same ray to rounding; the boxes are widened well
+ * beyond that rounding), and each triangle it may cross is mapped into p's frame by map's rot and
+ * tr exactly as ovl_compute maps B's vertices (map NULL: the frames are the same), then decided
+ * by the same predicates as any other crossing.
  */
-PD_FN int ovl_origin_in_b(ovl_ctx *c)
+PD_FN int ovl_tree_parity(ovl_ctx *c, const wb_tree *w, const ovl_in *map, pd_v3 p, pd_v3 r,
+                          pd_v3 pw, pd_v3 rw)
 {
-    if (c->origin_in_b >= 0) return c->origin_in_b;
-    const ovl_in *in = c->in;
-    const wb_tree *w = &in->wall;
-    const pd_real *R = in->rot;
-    pd_v3 r = v3_scale(c->d, PD_R(-1)), p = v3(0, 0, 0);
-    pd_v3 o = v3(-(R[0] * in->tr[0] + R[3] * in->tr[1] + R[6] * in->tr[2]),
-                 -(R[1] * in->tr[0] + R[4] * in->tr[1] + R[7] * in->tr[2]),
-                 -(R[2] * in->tr[0] + R[5] * in->tr[1] + R[8] * in->tr[2]));
-    pd_v3 rw = v3(R[0] * r.x + R[3] * r.y + R[6] * r.z, R[1] * r.x + R[4] * r.y + R[7] * r.z,
-                  R[2] * r.x + R[5] * r.y + R[8] * r.z);
     PD_GLOBAL const pd_real *root = w->box;
+    pd_v3 o = pw;
     pd_real ext = pd_max(v3_amax(o), pd_max(v3_amax(v3(root[0], root[1], root[2])),
                                             v3_amax(v3(root[3], root[4], root[5]))));
     pd_real pad = PD_R(1024) * PD_EPS * ext + c->pad;
@@ -350,13 +343,31 @@ PD_FN int ovl_origin_in_b(ovl_ctx *c)
             int t = w->order[i];
             int id[3] = {w->tri[3 * t], w->tri[3 * t + 1], w->tri[3 * t + 2]};
             pd_v3 v[3];
-            for (int q = 0; q < 3; q++)
-                v[q] = ovl_b_to_a(in, v3_load(w->vert, id[q]));
+            for (int q = 0; q < 3; q++) {
+                v[q] = v3_load(w->vert, id[q]);
+                if (map) v[q] = ovl_b_to_a(map, v[q]);
+            }
             odd ^= ovl_ray_crosses(c, p, r, PD_R(-1), v, id);
         }
     }
-    c->origin_in_b = odd;
     return odd;
+}
+
+/* OVL_OPEN_B: whether A's centroid (the origin) lies inside the whole wall: the parity of the
+ * ray along -d through the wall's tree (mapped back by rot^T: a wall has size 1). */
+PD_FN int ovl_origin_in_b(ovl_ctx *c)
+{
+    if (c->origin_in_b >= 0) return c->origin_in_b;
+    const ovl_in *in = c->in;
+    const pd_real *R = in->rot;
+    pd_v3 r = v3_scale(c->d, PD_R(-1));
+    pd_v3 o = v3(-(R[0] * in->tr[0] + R[3] * in->tr[1] + R[6] * in->tr[2]),
+                 -(R[1] * in->tr[0] + R[4] * in->tr[1] + R[7] * in->tr[2]),
+                 -(R[2] * in->tr[0] + R[5] * in->tr[1] + R[8] * in->tr[2]));
+    pd_v3 rw = v3(R[0] * r.x + R[3] * r.y + R[6] * r.z, R[1] * r.x + R[4] * r.y + R[7] * r.z,
+                  R[2] * r.x + R[5] * r.y + R[8] * r.z);
+    c->origin_in_b = ovl_tree_parity(c, &in->wall, in, v3(0, 0, 0), r, o, rw);
+    return c->origin_in_b;
 }
 
 /*
