@@ -8,15 +8,23 @@
  * barrier after every stage (the per-stage split; barriers add their own cost). Memory is what
  * the run allocated on the device (buffers), per particle.
  *
+ * --wall-grid G replaces the 12-triangle box floor by the same slab meshed as G x G grids on
+ * every face (12 G^2 triangles), to show what a finely meshed wall costs (its BVH, section 5.6).
+ *
  * usage: build/bench/step [--quick] [--sizes N,N,...] [--spheres N] [--settle S] [--steps S]
- *                         [--device N] [--single]
+ *                         [--device N] [--single] [--wall-grid G]
  */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
+#include "../tests/grid_box.h"
 #include "sim.h"
+
+static int wall_grid;      /* 0: a box floor */
+static char wall_path[64]; /* the meshed floor, when wall_grid */
 
 static double now(void)
 {
@@ -37,6 +45,18 @@ static void scenario(char *json, size_t len, long n, int spheres, int dbl)
     while (nxy * nxy * nz < n)
         nxy++;
     double w = nxy * cell * 1.0001, h = nz * cell * 1.0001;
+    char floor[200];
+    if (wall_grid) {
+        /* the box floor's slab, [-1, w + 1]^2 x [-0.1, 0] */
+        double c[3] = {0.5 * w, 0.5 * w, -0.05}, hh[3] = {0.5 * w + 1, 0.5 * w + 1, 0.05};
+        snprintf(wall_path, sizeof wall_path, "/tmp/polydem-bench-floor-%d.obj", (int)getpid());
+        if (grid_box_obj(wall_path, c, hh, wall_grid))
+            fprintf(stderr, "bench: cannot write %s\n", wall_path);
+        snprintf(floor, sizeof floor, "\"mesh\": \"%s\"", wall_path);
+    } else {
+        snprintf(floor, sizeof floor,
+                 "\"box\": {\"min\": [-1, -1, -0.1], \"max\": [%.9g, %.9g, 0]}", w + 1, w + 1);
+    }
     snprintf(json, len,
              "{\"name\": \"bench\", \"precision\": \"%s\", \"allow_unstable_dt\": true,"
              " \"time\": {\"dt\": 1e-5, \"duration\": 1, \"output_interval\": 1},"
@@ -52,11 +72,10 @@ static void scenario(char *json, size_t len, long n, int spheres, int dbl)
              " \"particles\": [{\"shape\": \"s\", \"material\": \"p\", \"count\": %ld, \"size\": "
              "%g, \"region\": {\"min\": [0, 0, 0.001], \"max\": [%.9g, %.9g, %.9g]}, "
              "\"orientation\": \"random\", \"velocity\": [0, 0, -1]}],"
-             " \"walls\": [{\"name\": \"floor\", \"material\": \"w\", \"box\": {\"min\": [-1, -1, "
-             "-0.1], \"max\": [%.9g, %.9g, 0]}}]}",
+             " \"walls\": [{\"name\": \"floor\", \"material\": \"w\", %s}]}",
              dbl ? "double" : "single",
              spheres ? "{\"sphere\": {}}" : "{\"builtin\": \"schonhardt\"}", n, size, w, w,
-             0.001 + h, w + 1, w + 1);
+             0.001 + h, floor);
 }
 
 static long count_contacts(sim *m)
@@ -79,7 +98,9 @@ static int bench_case(pd_device *dev, long n, int spheres, int dbl, int settle, 
     pd_scenario *s = NULL;
     pd_diags d = {0, 0, NULL};
     pd_error err = {0};
-    if (pd_scenario_parse(json, NULL, &s, &d, &err) != PD_OK) {
+    int prc = pd_scenario_parse(json, NULL, &s, &d, &err);
+    if (wall_grid) remove(wall_path);
+    if (prc != PD_OK) {
         fprintf(stderr, "bench: scenario: %s %s\n", d.n ? d.items[0].path : "",
                 d.n ? d.items[0].msg : err.msg);
         pd_diags_free(&d);
@@ -97,7 +118,7 @@ static int bench_case(pd_device *dev, long n, int spheres, int dbl, int settle, 
     clFinish(dev->queue);
     double t = now() - t0;
     long contacts = rc == PD_OK ? count_contacts(m) : 0;
-    m->profile = 1;
+    if (m) m->profile = 1;
     for (int i = 0; i < steps && rc == PD_OK; i++)
         rc = sim_step(m, &bad, &err);
     if (rc != PD_OK || bad >= 0) {
@@ -149,10 +170,12 @@ int main(int argc, char **argv)
             device = atoi(argv[++i]);
         } else if (!strcmp(argv[i], "--single")) {
             dbl = 0;
+        } else if (!strcmp(argv[i], "--wall-grid") && i + 1 < argc) {
+            wall_grid = atoi(argv[++i]);
         } else {
             fprintf(stderr,
                     "usage: %s [--quick] [--sizes N,N] [--spheres N] [--settle S] "
-                    "[--steps S] [--device N] [--single]\n",
+                    "[--steps S] [--device N] [--single] [--wall-grid G]\n",
                     argv[0]);
             return 2;
         }
@@ -165,8 +188,12 @@ int main(int argc, char **argv)
         return 1;
     }
     if (dbl && !pd_device_has_fp64(dev)) dbl = 0;
-    printf("device: %s, %s precision, dt 1e-5 s, %d settling steps, %d timed\n",
+    printf("device: %s, %s precision, dt 1e-5 s, %d settling steps, %d timed, floor: ",
            pd_device_name(dev), dbl ? "double" : "single", settle, steps);
+    if (wall_grid)
+        printf("%d x %d grids (%d triangles)\n", wall_grid, wall_grid, 12 * wall_grid * wall_grid);
+    else
+        printf("a box (12 triangles)\n");
     printf("%-10s %8s %9s %10s %9s %9s %10s %8s | %% of step: integ bvh   trav  contacts gather\n",
            "case", "N", "ms/step", "p-steps/s", "contacts", "pairs", "us/c-step", "B/part");
     int rc = 0;

@@ -120,15 +120,36 @@ static int cmp_u64(const void *pa, const void *pb)
     return a < b ? -1 : a > b;
 }
 
+/* Sorted unique cell keys with their counts: the count of cell key[i] is cnt[i]. */
+static int cell_count(const uint64_t *key, const int *cnt, size_t n, uint64_t k)
+{
+    size_t lo = 0, hi = n;
+    while (lo < hi) {
+        size_t mid = lo + (hi - lo) / 2;
+        if (key[mid] < k)
+            lo = mid + 1;
+        else
+            hi = mid;
+    }
+    return lo < n && key[lo] == k ? cnt[lo] : 0;
+}
+
+static uint64_t cell_key(long x, long y, long z)
+{
+    return (uint64_t)(x + 2) << 42 | (uint64_t)(y + 2) << 21 | (uint64_t)(z + 2);
+}
+
 int wall_tree_max_near(const wall_tree *t, const double *vert, const int *tri, int nt, double side)
 {
-    enum { MAX_CELLS = 4000000 };
+    enum { MAX_KEYS = 16000000 }; /* 128 MB of keys while counting */
     if (nt <= 0 || !(side > 0)) return nt > 0 ? nt : 0;
     const double *root = t->box;
-    /* cells of the grid anchored at the root's low corner; index ranges must fit 21 bits */
+    /* cells of side `side` on a grid anchored at the root's low corner (indices in 21 bits) */
     for (int q = 0; q < 3; q++)
         if ((root[3 + q] - root[q]) / side > 1e6) return nt;
-    size_t ncell = 0;
+    size_t nk = 0;
+    long(*range)[6] = malloc(sizeof *range * (size_t)nt);
+    if (!range) return -1;
     for (int i = 0; i < nt; i++) {
         size_t m = 1;
         for (int q = 0; q < 3; q++) {
@@ -137,52 +158,59 @@ int wall_tree_max_near(const wall_tree *t, const double *vert, const int *tri, i
                 lo = fmin(lo, vert[3 * tri[3 * i + v] + q]);
                 hi = fmax(hi, vert[3 * tri[3 * i + v] + q]);
             }
-            m *= (size_t)(floor((hi - root[q]) / side) - floor((lo - root[q]) / side) + 2);
-        }
-        ncell += m;
-        if (ncell > MAX_CELLS) return nt;
-    }
-    uint64_t *key = malloc(sizeof *key * (ncell + 1));
-    if (!key) return -1;
-    size_t nk = 0;
-    for (int i = 0; i < nt; i++) {
-        long lo[3], hi[3];
-        for (int q = 0; q < 3; q++) {
-            double a = INFINITY, b = -INFINITY;
-            for (int v = 0; v < 3; v++) {
-                a = fmin(a, vert[3 * tri[3 * i + v] + q]);
-                b = fmax(b, vert[3 * tri[3 * i + v] + q]);
-            }
-            /* the cubes of side 2 side starting one cell below reach the triangle too */
-            lo[q] = (long)floor((a - root[q]) / side) - 1;
-            hi[q] = (long)floor((b - root[q]) / side);
-        }
-        for (long x = lo[0]; x <= hi[0]; x++)
-            for (long y = lo[1]; y <= hi[1]; y++)
-                for (long z = lo[2]; z <= hi[2]; z++)
-                    key[nk++] =
-                        (uint64_t)(x + 2) << 42 | (uint64_t)(y + 2) << 21 | (uint64_t)(z + 2);
-    }
-    qsort(key, nk, sizeof *key, cmp_u64);
-    wb_tree w = {t->box, t->kid, t->order, vert, tri};
-    int best = 0;
-    for (size_t k = 0; k < nk; k++) {
-        if (k > 0 && key[k] == key[k - 1]) continue;
-        long idx[3] = {(long)(key[k] >> 42) - 2, (long)(key[k] >> 21 & 0x1fffff) - 2,
-                       (long)(key[k] & 0x1fffff) - 2};
-        double lo[3], hi[3];
-        for (int q = 0; q < 3; q++) {
             /* widened a little: the bound must hold for the kernel's rounding too */
-            lo[q] = root[q] + (double)idx[q] * side - 1e-9 * side;
-            hi[q] = root[q] + (double)(idx[q] + 2) * side + 1e-9 * side;
+            range[i][q] = (long)floor((lo - root[q]) / side - 1e-9);
+            range[i][3 + q] = (long)floor((hi - root[q]) / side + 1e-9);
+            m *= (size_t)(range[i][3 + q] - range[i][q] + 1);
         }
-        int m = wb_query_box(&w, v3(lo[0], lo[1], lo[2]), v3(hi[0], hi[1], hi[2]), NULL, 0);
-        if (m < 0) {
-            best = nt;
-            break;
+        nk += m;
+        if (nk > MAX_KEYS) {
+            free(range);
+            return nt;
         }
-        best = m > best ? m : best;
+    }
+    uint64_t *key = malloc(sizeof *key * (nk + 1));
+    int *cnt = malloc(sizeof *cnt * (nk + 1));
+    if (!key || !cnt) {
+        free(range);
+        free(key);
+        free(cnt);
+        return -1;
+    }
+    /* every (triangle, cell its box meets) */
+    size_t k = 0;
+    for (int i = 0; i < nt; i++)
+        for (long x = range[i][0]; x <= range[i][3]; x++)
+            for (long y = range[i][1]; y <= range[i][4]; y++)
+                for (long z = range[i][2]; z <= range[i][5]; z++)
+                    key[k++] = cell_key(x, y, z);
+    free(range);
+    qsort(key, nk, sizeof *key, cmp_u64);
+    size_t nu = 0;
+    for (size_t i = 0; i < nk; i++) {
+        if (nu > 0 && key[nu - 1] == key[i]) {
+            cnt[nu - 1]++;
+        } else {
+            key[nu] = key[i];
+            cnt[nu++] = 1;
+        }
+    }
+    /* A cube of side `side` lies within 2 x 2 x 2 cells, whose counts bound the triangles it can
+     * meet; every such block containing an occupied cell is summed. */
+    long best = 0;
+    for (size_t i = 0; i < nu; i++) {
+        long c[3] = {(long)(key[i] >> 42) - 2, (long)(key[i] >> 21 & 0x1fffff) - 2,
+                     (long)(key[i] & 0x1fffff) - 2};
+        for (int b = 0; b < 8; b++) {
+            long o[3] = {c[0] - (b & 1), c[1] - (b >> 1 & 1), c[2] - (b >> 2 & 1)}, sum = 0;
+            for (int e = 0; e < 8; e++)
+                sum +=
+                    cell_count(key, cnt, nu,
+                               cell_key(o[0] + (e & 1), o[1] + (e >> 1 & 1), o[2] + (e >> 2 & 1)));
+            best = sum > best ? sum : best;
+        }
     }
     free(key);
-    return best;
+    free(cnt);
+    return best < nt ? (int)best : nt;
 }

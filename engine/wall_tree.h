@@ -26,10 +26,10 @@ void wall_tree_free(wall_tree *t);
 
 /*
  * An upper bound on the number of triangles whose boxes meet any axis-aligned cube of side
- * `side` (m): every such cube lies in one of the grid-aligned cubes of side 2 side (grid spacing
- * `side`), and those that meet a triangle are counted. Falls back to nt when the grid would need
- * more than a few million cells (a wall far larger than the cube in every direction with few,
- * huge triangles). Returns -1 when out of memory.
+ * `side` (m): such a cube lies within 2 x 2 x 2 cells of a grid of that spacing, so the largest
+ * sum of eight neighbouring cells' counts (triangles whose boxes meet the cell) bounds it, at
+ * most nt. Falls back to nt when counting would take more than 128 MB (a wall far larger than
+ * the cube with few, huge triangles). Returns -1 when out of memory.
  */
 int wall_tree_max_near(const wall_tree *t, const double *vert, const int *tri, int nt, double side);
 

@@ -325,6 +325,29 @@ TEST(cube_slides_on_a_finely_meshed_floor)
     CHECK(v_mesh < 0.01 * u0);
 }
 
+/* A particle whose centre starts inside a wall is refused with a message naming both; one that
+ * only overlaps a wall's surface starts (and is pushed out). */
+TEST(particle_inside_wall_is_refused)
+{
+    char json[1500];
+    cube_json(json, sizeof json, 1e-5, -0.05, 0, 0.5, 0.5);
+    pd_scenario *s = NULL;
+    pd_diags d = {0, 0, NULL};
+    pd_error err = {0};
+    sim *m = NULL;
+    CHECK_EQ_INT(PD_OK, pd_scenario_parse(json, NULL, &s, &d, &err));
+    pd_diags_free(&d);
+    CHECK_EQ_INT(PD_EINVAL, sim_create(dev, s, &m, &err));
+    printf("  %s\n", err.msg);
+    CHECK(strstr(err.msg, "particle 0") && strstr(err.msg, "inside wall 'floor'"));
+    CHECK(m == NULL);
+    pd_scenario_destroy(s);
+    cube_json(json, sizeof json, 1e-5, 0.001, 0, 0.5, 0.5); /* sunk 9 mm into the floor */
+    run r;
+    if (start(&r, json)) return;
+    finish(&r);
+}
+
 /* Seed 004 A.7: a sphere at rest in a uniform flow approaches it as u = u_f (1 - exp(-t/tau)),
  * tau = rho d^2 / (18 mu) (eq. 1.2). The drag is evaluated at the half-step velocity, so the
  * error is O(dt / tau) = 1e-3 at dt = tau / 1000: tolerance 2e-3. */
@@ -864,6 +887,7 @@ int main(void)
     RUN(cube_rests_flat_on_wall);
     RUN(cube_slides_to_rest);
     RUN(cube_slides_on_a_finely_meshed_floor);
+    RUN(particle_inside_wall_is_refused);
     RUN(stokes_drag_relaxation);
     RUN(moving_wall_pushes_sphere);
     RUN(cohesion_stickiness_threshold);

@@ -383,7 +383,7 @@ TEST(too_many_near_triangles_is_reported)
     printf("  cubes of 0.4 m: at most %d of %d triangles met, bound %d\n", worst, wall->ntris,
            bound);
     CHECK(worst <= bound);
-    CHECK(bound < wall->ntris / 4); /* a bound that is any use */
+    CHECK(bound < wall->ntris / 3); /* a bound that is of use (it sizes scratch memory) */
     free(iscr);
     free(rscr);
     wall_tree_free(&tree);
