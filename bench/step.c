@@ -11,8 +11,13 @@
  * --wall-grid G replaces the 12-triangle box floor by the same slab meshed as G x G grids on
  * every face (12 G^2 triangles), to show what a finely meshed wall costs (its BVH, section 5.6).
  *
+ * --traversal also times the broad phase's traversal alone on the settled state, twice: the
+ * pipeline's per-particle depth-first query (broad_count) and a batched breadth-first traversal
+ * with stream compaction (bfs_count/bfs_write in kernels/broad_phase.cl; the host reads each
+ * level's frontier size), and checks that both find the same number of candidate pairs.
+ *
  * usage: build/bench/step [--quick] [--sizes N,N,...] [--spheres N] [--settle S] [--steps S]
- *                         [--device N] [--single] [--wall-grid G]
+ *                         [--device N] [--single] [--wall-grid G] [--traversal]
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -23,6 +28,7 @@
 #include "../tests/grid_box.h"
 #include "sim.h"
 
+static int traversal;      /* also time DFS against BFS traversal */
 static int wall_grid;      /* 0: a box floor */
 static char wall_path[64]; /* the meshed floor, when wall_grid */
 
@@ -91,6 +97,148 @@ static long count_contacts(sim *m)
     return c;
 }
 
+static cl_mem grow(pd_device *dev, cl_mem b, size_t *cap, size_t need, cl_int *e)
+{
+    if (need <= *cap && b) return b;
+    if (b) clReleaseMemObject(b);
+    *cap = need + need / 2 + 64;
+    return clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * *cap, NULL, e);
+}
+
+#define SETARG(k, i, v) (clSetKernelArg(k, i, sizeof(v), &(v)))
+
+/*
+ * The traversal alone, depth first (the pipeline's broad_count, with the arguments its last step
+ * set) against breadth first; prints ms per traversal and the pairs each found.
+ */
+static int traversal_compare(sim *m, int reps)
+{
+    pd_device *dev = m->dev;
+    pd_error err = {0};
+    int n = m->n, rc = PD_OK, levels = 0;
+    cl_int e = CL_SUCCESS;
+    if (n < 2 || n <= SIM_BRUTE_MAX) return 0;
+    /* depth first */
+    double t0 = now();
+    for (int r = 0; r < reps && rc == PD_OK; r++)
+        rc = cl_launch(dev, m->k_count, (size_t)n, "broad_count", &err);
+    clFinish(dev->queue);
+    double t_dfs = (now() - t0) / reps;
+    int *cnt = malloc(sizeof(int) * (size_t)n);
+    cl_ulong *keys = malloc(sizeof(cl_ulong) * ((size_t)m->n_old + 1));
+    long dfs = 0, walls = 0, bfs = 0;
+    if (rc == PD_OK && cnt && keys) {
+        clEnqueueReadBuffer(dev->queue, m->count, CL_TRUE, 0, sizeof(int) * n, cnt, 0, NULL, NULL);
+        clEnqueueReadBuffer(dev->queue, m->old.keys, CL_TRUE, 0, sizeof(cl_ulong) * m->n_old, keys,
+                            0, NULL, NULL);
+        for (int i = 0; i < n; i++)
+            dfs += cnt[i];
+        for (int k = 0; k < m->n_old; k++)
+            walls += (keys[k] & 0xffffffffu) >= 0x80000000u; /* CH_WALL: walls' ids */
+    }
+    /* breadth first */
+    cl_program prog;
+    cl_kernel kc = NULL, kw = NULL;
+    if (rc == PD_OK) rc = cl_program_get(dev, "broad_phase", m->dbl, &prog, &err);
+    if (rc == PD_OK) kc = clCreateKernel(prog, "bfs_count", &e);
+    if (rc == PD_OK && e == CL_SUCCESS) kw = clCreateKernel(prog, "bfs_write", &e);
+    /* frontier buffers: [f][0] particles, [f][1] nodes; f = cur, 1 - cur the next level */
+    cl_mem fb[2][2] = {{NULL, NULL}, {NULL, NULL}}, emit = NULL, off = NULL, count = NULL;
+    size_t fcap[2][2] = {{0, 0}, {0, 0}}, ecap = 0, ocap = 0, ccap = 0;
+    double t_bfs = 0;
+    for (int r = 0; r <= reps && rc == PD_OK && e == CL_SUCCESS; r++) { /* r = 0: warm-up */
+        int nf = n, zero = 0, cur = 0;
+        for (int k = 0; k < 2; k++)
+            fb[0][k] = grow(dev, fb[0][k], &fcap[0][k], (size_t)nf, &e);
+        count = grow(dev, count, &ccap, (size_t)n, &e);
+        int *init = malloc(sizeof(int) * 2 * (size_t)n);
+        if (e != CL_SUCCESS || !init) {
+            free(init);
+            break;
+        }
+        /* the frontier starts as (i, root) for every particle: set up outside the timing */
+        for (int i = 0; i < n; i++) {
+            init[i] = i;
+            init[n + i] = 0;
+        }
+        clEnqueueWriteBuffer(dev->queue, fb[0][0], CL_TRUE, 0, sizeof(int) * n, init, 0, NULL,
+                             NULL);
+        clEnqueueWriteBuffer(dev->queue, fb[0][1], CL_TRUE, 0, sizeof(int) * n, init + n, 0, NULL,
+                             NULL);
+        free(init);
+        clEnqueueFillBuffer(dev->queue, count, &zero, sizeof zero, 0, sizeof(int) * n, 0, NULL,
+                            NULL);
+        clFinish(dev->queue);
+        t0 = now();
+        levels = 0;
+        while (nf > 0 && rc == PD_OK && e == CL_SUCCESS) {
+            levels++;
+            emit = grow(dev, emit, &ecap, (size_t)nf + 1, &e);
+            off = grow(dev, off, &ocap, (size_t)nf + 1, &e);
+            if (e != CL_SUCCESS) break;
+            e |= SETARG(kc, 0, m->tbox);
+            e |= SETARG(kc, 1, m->left);
+            e |= SETARG(kc, 2, m->right);
+            e |= SETARG(kc, 3, n);
+            e |= SETARG(kc, 4, m->pbox);
+            e |= SETARG(kc, 5, fb[cur][0]);
+            e |= SETARG(kc, 6, fb[cur][1]);
+            e |= SETARG(kc, 7, nf);
+            e |= SETARG(kc, 8, emit);
+            if (e != CL_SUCCESS) break;
+            rc = cl_launch(dev, kc, (size_t)nf, "bfs_count", &err);
+            if (rc == PD_OK) rc = dsort_scan(&m->sort, emit, nf, off, &err);
+            int next = 0;
+            if (rc == PD_OK)
+                e = clEnqueueReadBuffer(dev->queue, off, CL_TRUE, sizeof(int) * (size_t)nf,
+                                        sizeof next, &next, 0, NULL, NULL);
+            for (int k = 0; k < 2 && e == CL_SUCCESS; k++)
+                fb[1 - cur][k] = grow(dev, fb[1 - cur][k], &fcap[1 - cur][k], (size_t)next + 1, &e);
+            if (e != CL_SUCCESS || rc != PD_OK) break;
+            e |= SETARG(kw, 0, m->tbox);
+            e |= SETARG(kw, 1, m->left);
+            e |= SETARG(kw, 2, m->right);
+            e |= SETARG(kw, 3, m->idx);
+            e |= SETARG(kw, 4, n);
+            e |= SETARG(kw, 5, m->pbox);
+            e |= SETARG(kw, 6, fb[cur][0]);
+            e |= SETARG(kw, 7, fb[cur][1]);
+            e |= SETARG(kw, 8, nf);
+            e |= SETARG(kw, 9, off);
+            e |= SETARG(kw, 10, fb[1 - cur][0]);
+            e |= SETARG(kw, 11, fb[1 - cur][1]);
+            e |= SETARG(kw, 12, count);
+            if (e != CL_SUCCESS) break;
+            rc = cl_launch(dev, kw, (size_t)nf, "bfs_write", &err);
+            cur = 1 - cur;
+            nf = next;
+        }
+        clFinish(dev->queue);
+        if (r > 0) t_bfs += now() - t0;
+    }
+    t_bfs /= reps;
+    if (rc == PD_OK && e == CL_SUCCESS && cnt) {
+        clEnqueueReadBuffer(dev->queue, count, CL_TRUE, 0, sizeof(int) * n, cnt, 0, NULL, NULL);
+        for (int i = 0; i < n; i++)
+            bfs += cnt[i];
+    }
+    if (rc != PD_OK || e != CL_SUCCESS)
+        fprintf(stderr, "bench: traversal: %s (OpenCL %d)\n", err.msg, (int)e);
+    else
+        printf("  traversal of %d particles: depth first %.3g ms (%ld pairs), breadth first %.3g "
+               "ms (%ld pairs, %d levels)%s\n",
+               n, 1e3 * t_dfs, dfs - walls, 1e3 * t_bfs, bfs, levels,
+               dfs - walls == bfs ? "" : "  MISMATCH");
+    cl_mem bufs[] = {fb[0][0], fb[0][1], fb[1][0], fb[1][1], emit, off, count};
+    for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++)
+        if (bufs[i]) clReleaseMemObject(bufs[i]);
+    if (kc) clReleaseKernel(kc);
+    if (kw) clReleaseKernel(kw);
+    free(cnt);
+    free(keys);
+    return rc != PD_OK || e != CL_SUCCESS || dfs - walls != bfs;
+}
+
 static int bench_case(pd_device *dev, long n, int spheres, int dbl, int settle, int steps)
 {
     char json[4000];
@@ -137,9 +285,10 @@ static int bench_case(pd_device *dev, long n, int spheres, int dbl, int settle, 
         printf(" %5.1f", 100 * m->stage_seconds[k] / total);
     printf("\n");
     fflush(stdout);
+    int bad_traversal = traversal ? traversal_compare(m, 5) : 0;
     sim_destroy(m);
     pd_scenario_destroy(s);
-    return 0;
+    return bad_traversal;
 }
 
 int main(int argc, char **argv)
@@ -170,12 +319,14 @@ int main(int argc, char **argv)
             device = atoi(argv[++i]);
         } else if (!strcmp(argv[i], "--single")) {
             dbl = 0;
+        } else if (!strcmp(argv[i], "--traversal")) {
+            traversal = 1;
         } else if (!strcmp(argv[i], "--wall-grid") && i + 1 < argc) {
             wall_grid = atoi(argv[++i]);
         } else {
             fprintf(stderr,
                     "usage: %s [--quick] [--sizes N,N] [--spheres N] [--settle S] "
-                    "[--steps S] [--device N] [--single] [--wall-grid G]\n",
+                    "[--steps S] [--device N] [--single] [--wall-grid G] [--traversal]\n",
                     argv[0]);
             return 2;
         }

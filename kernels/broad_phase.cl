@@ -134,3 +134,60 @@ __kernel void broad_write(__global const pd_real *box, __global const int *left,
         keys[off + a] = ch_make((unsigned)i, (unsigned)ids[a]);
     walls_meeting(wbox, nwall, q, keys + off + m, (unsigned)i);
 }
+
+/*
+ * Batched breadth-first traversal, the alternative the thesis (section 5.5) found 5-10x faster
+ * than per-particle depth first on its GPU. Kept for the measurement in bench/step --traversal
+ * (bench/RESULTS.md: 2.7-4.2x slower than depth first on a 2-core CPU through PoCL); the
+ * pipeline uses broad_count/broad_write. A frontier holds (particle,
+ * node) entries whose boxes meet; one level counts each entry's internal children that meet the
+ * particle's box (bfs_count), the host scans the counts into offsets, and bfs_write writes them
+ * as the next frontier and counts the leaf children that are candidate partners (above the
+ * particle, spheres meeting) into count[particle] (integer atomics: the sums are exact).
+ */
+PD_FN int bfs_meets(__global const pd_real *box, __global const pd_real *pbox, int i, int node)
+{
+    pd_real q[6];
+    for (int c = 0; c < 6; c++)
+        q[c] = pbox[6 * i + c];
+    return bvh_boxes_meet(box + 6 * node, q);
+}
+
+__kernel void bfs_count(__global const pd_real *box, __global const int *left,
+                        __global const int *right, int n, __global const pd_real *pbox,
+                        __global const int *fp, __global const int *fnode, int nf,
+                        __global int *emit)
+{
+    int e = (int)get_global_id(0);
+    if (e >= nf) return;
+    int i = fp[e], node = fnode[e], m = 0;
+    int kids[2] = {left[node], right[node]};
+    for (int k = 0; k < 2; k++)
+        m += kids[k] < n - 1 && bfs_meets(box, pbox, i, kids[k]);
+    emit[e] = m;
+}
+
+__kernel void bfs_write(__global const pd_real *box, __global const int *left,
+                        __global const int *right, __global const int *idx, int n,
+                        __global const pd_real *pbox, __global const int *fp,
+                        __global const int *fnode, int nf, __global const int *offset,
+                        __global int *np, __global int *nnode, __global int *count)
+{
+    int e = (int)get_global_id(0);
+    if (e >= nf) return;
+    int i = fp[e], node = fnode[e], o = offset[e];
+    int kids[2] = {left[node], right[node]};
+    pd_real q[6];
+    for (int c = 0; c < 6; c++)
+        q[c] = pbox[6 * i + c];
+    for (int k = 0; k < 2; k++) {
+        int c = kids[k];
+        if (!bvh_boxes_meet(box + 6 * c, q)) continue;
+        if (c < n - 1) {
+            np[o] = i;
+            nnode[o++] = c;
+        } else if (idx[c - (n - 1)] > i && bvh_spheres_meet(box + 6 * c, q)) {
+            atomic_inc(count + i);
+        }
+    }
+}
