@@ -16,8 +16,11 @@
  * with stream compaction (bfs_count/bfs_write in kernels/broad_phase.cl; the host reads each
  * level's frontier size), and checks that both find the same number of candidate pairs.
  *
+ * --no-skin builds the pair list every step (the engine's default reuses it until a particle has
+ * moved half the Verlet skin, a tenth of the smallest particle).
+ *
  * usage: build/bench/step [--quick] [--sizes N,N,...] [--spheres N] [--settle S] [--steps S]
- *                         [--device N] [--single] [--wall-grid G] [--traversal]
+ *                         [--device N] [--single] [--wall-grid G] [--traversal] [--no-skin]
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -29,6 +32,7 @@
 #include "sim.h"
 
 static int traversal;      /* also time DFS against BFS traversal */
+static int no_skin;        /* build the pair list every step (no Verlet skin) */
 static int wall_grid;      /* 0: a box floor */
 static char wall_path[64]; /* the meshed floor, when wall_grid */
 
@@ -256,15 +260,18 @@ static int bench_case(pd_device *dev, long n, int spheres, int dbl, int settle, 
     }
     sim *m = NULL;
     int bad = -1, rc = sim_create(dev, s, &m, &err);
+    if (rc == PD_OK && no_skin) m->skin = 0;
     if (rc == PD_OK) rc = sim_forces(m, &err);
     for (int i = 0; i < settle && rc == PD_OK; i++)
         rc = sim_step(m, &bad, &err);
     clFinish(dev->queue);
     double t0 = now();
+    long long built0 = m ? m->builds : 0;
     for (int i = 0; i < steps && rc == PD_OK; i++)
         rc = sim_step(m, &bad, &err);
     clFinish(dev->queue);
     double t = now() - t0;
+    long long built = m ? m->builds - built0 : 0;
     long contacts = rc == PD_OK ? count_contacts(m) : 0;
     if (m) m->profile = 1;
     for (int i = 0; i < steps && rc == PD_OK; i++)
@@ -283,7 +290,19 @@ static int bench_case(pd_device *dev, long n, int spheres, int dbl, int settle, 
            contacts ? 1e6 * per_step / contacts : 0, m->bytes / n);
     for (int k = 0; k < SIM_NSTAGES; k++)
         printf(" %5.1f", 100 * m->stage_seconds[k] / total);
-    printf("\n");
+    printf("\n  pair list built in %lld of the %d timed steps (skin %.3g m)\n", built, steps,
+           m->skin);
+    if (getenv("BENCH_DUMP")) { /* positions, for comparing runs */
+        double *x = malloc(sizeof(double) * 3 * (size_t)n);
+        if (x && sim_read(m, m->x, 0, 3 * (size_t)n, x, &err) == PD_OK) {
+            FILE *f = fopen(getenv("BENCH_DUMP"), "wb");
+            if (f) {
+                fwrite(x, sizeof(double), 3 * (size_t)n, f);
+                fclose(f);
+            }
+        }
+        free(x);
+    }
     fflush(stdout);
     int bad_traversal = traversal ? traversal_compare(m, 5) : 0;
     sim_destroy(m);
@@ -319,15 +338,18 @@ int main(int argc, char **argv)
             device = atoi(argv[++i]);
         } else if (!strcmp(argv[i], "--single")) {
             dbl = 0;
+        } else if (!strcmp(argv[i], "--no-skin")) {
+            no_skin = 1;
         } else if (!strcmp(argv[i], "--traversal")) {
             traversal = 1;
         } else if (!strcmp(argv[i], "--wall-grid") && i + 1 < argc) {
             wall_grid = atoi(argv[++i]);
         } else {
-            fprintf(stderr,
-                    "usage: %s [--quick] [--sizes N,N] [--spheres N] [--settle S] "
-                    "[--steps S] [--device N] [--single] [--wall-grid G] [--traversal]\n",
-                    argv[0]);
+            fprintf(
+                stderr,
+                "usage: %s [--quick] [--sizes N,N] [--spheres N] [--settle S] "
+                "[--steps S] [--device N] [--single] [--wall-grid G] [--traversal] [--no-skin]\n",
+                argv[0]);
             return 2;
         }
     }

@@ -11,7 +11,9 @@
  *   kick (dt/2) -> drift -> [walls moved] -> forces -> kick (dt/2)
  * where forces = boxes -> Morton codes -> radix sort -> LBVH nodes -> refit -> traversal
  * (count, scan, write: sorted keys) -> contact forces with history -> gather by particle
- * (contacts as second body counted and listed, then summed in key order).
+ * (contacts as second body counted and listed, then summed in key order). The broad phase
+ * (boxes to traversal) runs only when the pair list is stale: boxes carry a Verlet skin, and the
+ * last list is reused until a particle has moved half of it (see `skin` below).
  * The host reads one int per step (the number of candidate pairs, to size the pair arrays) and
  * the divergence flag; everything else stays on the device until a stats row or frame is due.
  */
@@ -61,6 +63,16 @@ typedef struct sim {
     /* [1]: lowest particle found not finite, [2]: lowest particle * nwall + wall with more
      * wall triangles near it than wall_cap (kernels/contact_pair.h); INT_MAX when none */
     cl_int status_host[3];
+    /*
+     * Verlet skin: particle boxes are grown by skin / 2, so the pair list built at positions
+     * x_ref holds every pair that can touch until some particle has moved skin / 2 (the drift
+     * kernel flags status[0]); until then a step reuses the list instead of building the tree
+     * and traversing it. Moving walls rebuild every step.
+     */
+    double skin;
+    cl_mem x_ref;
+    int list_valid;   /* a list was built and nothing since invalidates it */
+    long long builds; /* pair lists built so far (bench) */
     /* pairs: current and last step's (history) */
     sim_pairs cur, old;
     int npairs, n_old;

@@ -81,11 +81,73 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     return PD_OK;
 }
 
+/* The divergence and wall flags the kernels set (status[1], status[2]): an error for the latter. */
+static int check_status(sim *m, pd_error *err)
+{
+    if (m->status_host[2] != INT_MAX) { /* last step's contacts: a wall too fine near a particle */
+        int code = m->status_host[2], wi = code % m->nwall;
+        return pd_error_set(err, PD_EINVAL,
+                            "run: step %lld: wall '%s' has more than %d triangles within the "
+                            "bounding cube of particle %d, beyond the bound computed from its "
+                            "mesh at the start (a particle far from the origin?)",
+                            m->step, m->s->wall[wi].name, m->wall_cap, code / m->nwall);
+    }
+    return PD_OK;
+}
+
+/*
+ * The last step's pair list again, when no particle has moved half the skin since it was built
+ * (status[0], set by the drift): the same keys in the same order, so each pair's history is
+ * where the contact stage looks. Returns 1 when reused, 0 when the list must be built, or an
+ * error.
+ */
+static int reuse_pairs(sim *m, pd_error *err)
+{
+    pd_device *dev = m->dev;
+    if (!m->list_valid || m->walls_move || !m->old.keys) return 0;
+    cl_int e = clEnqueueReadBuffer(dev->queue, m->status, CL_TRUE, 0, sizeof m->status_host,
+                                   m->status_host, 0, NULL, NULL);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(status)", e);
+    int rc = check_status(m, err);
+    if (rc != PD_OK) return rc;
+    if (m->status_host[0]) return 0;
+    int np = m->n_old;
+    if ((rc = ensure_pairs(m, np, err)) != PD_OK) return rc;
+    if (np > 0)
+        e = clEnqueueCopyBuffer(dev->queue, m->old.keys, m->cur.keys, 0, 0,
+                                sizeof(cl_ulong) * (size_t)np, 0, NULL, NULL);
+    if (e == CL_SUCCESS)
+        e = clEnqueueCopyBuffer(dev->queue, m->old_offset, m->offset, 0, 0,
+                                sizeof(int) * ((size_t)m->n + 1), 0, NULL, NULL);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueCopyBuffer(pair list)", e);
+    m->npairs = np;
+    return 1;
+}
+
+/* After a build: its positions are the reference the skin is measured from. */
+static int list_built(sim *m, pd_error *err)
+{
+    int zero = 0;
+    cl_int e = clEnqueueCopyBuffer(m->dev->queue, m->x, m->x_ref, 0, 0, m->rs * 3 * (size_t)m->n, 0,
+                                   NULL, NULL);
+    if (e == CL_SUCCESS)
+        e = clEnqueueFillBuffer(m->dev->queue, m->status, &zero, sizeof zero, 0, sizeof zero, 0,
+                                NULL, NULL);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueCopyBuffer(reference positions)", e);
+    m->list_valid = 1;
+    m->builds++;
+    return PD_OK;
+}
+
 /* Broad phase: boxes, tree, traversal; leaves the step's sorted pair keys in m->cur.keys. */
 static int broad_phase(sim *m, double *t0, pd_error *err)
 {
     pd_device *dev = m->dev;
-    int n = m->n, nw = m->nwall, rc;
+    int n = m->n, nw = m->nwall, rc = reuse_pairs(m, err);
+    if (rc != 0) { /* reused (1) or an error */
+        stage_end(m, SIM_TRAVERSE, t0);
+        return rc == 1 ? PD_OK : rc;
+    }
     cl_int e = CL_SUCCESS;
     /* the top 32 bits of the 63-bit Morton codes (10-11 bits per axis, 1/2048 of the scene
      * box): four radix passes instead of eight; equal codes are ordered by index (Karras) */
@@ -95,7 +157,7 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     e |= ARG(m->k_boxes, 2, m->shape);
     e |= ARG(m->k_boxes, 3, m->radius_ratio);
     e |= ARG(m->k_boxes, 4, n);
-    e |= arg_real(m, m->k_boxes, 5, m->margin);
+    e |= arg_real(m, m->k_boxes, 5, m->margin + 0.5 * m->skin);
     e |= ARG(m->k_boxes, 6, m->pbox);
     if (e != CL_SUCCESS) return arg_fail(err, "particle_boxes");
     if ((rc = cl_launch(dev, m->k_boxes, (size_t)n, "particle_boxes", err)) != PD_OK) return rc;
@@ -170,14 +232,7 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
                                 sizeof total, &total, 0, NULL, NULL);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(pair count)", e);
     if (total < 0) return pd_error_set(err, PD_ENOMEM, "run: more than 2^31 candidate pairs");
-    if (m->status_host[2] != INT_MAX) { /* last step's contacts: a wall too fine near a particle */
-        int code = m->status_host[2], wi = code % m->nwall;
-        return pd_error_set(err, PD_EINVAL,
-                            "run: step %lld: wall '%s' has more than %d triangles within the "
-                            "bounding cube of particle %d, beyond the bound computed from its "
-                            "mesh at the start (a particle far from the origin?)",
-                            m->step, m->s->wall[wi].name, m->wall_cap, code / m->nwall);
-    }
+    if ((rc = check_status(m, err)) != PD_OK) return rc;
     if ((rc = ensure_pairs(m, total, err)) != PD_OK) return rc;
     m->npairs = total;
 
@@ -196,6 +251,7 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     e |= ARG(m->k_write, 12, brute);
     if (e != CL_SUCCESS) return arg_fail(err, "broad_write");
     rc = cl_launch(dev, m->k_write, (size_t)n, "broad_write", err);
+    if (rc == PD_OK) rc = list_built(m, err);
     stage_end(m, SIM_TRAVERSE, t0);
     return rc;
 }
@@ -345,6 +401,8 @@ int sim_step(sim *m, int *bad_particle, pd_error *err)
     e |= ARG(k, 6, m->n);
     e |= arg_real(m, k, 7, m->dt);
     e |= ARG(k, 8, m->status);
+    e |= ARG(k, 9, m->x_ref);
+    e |= arg_real(m, k, 10, 0.25 * m->skin * m->skin);
     if (e != CL_SUCCESS) return arg_fail(err, "integrate_drift");
     if ((rc = cl_launch(m->dev, k, (size_t)m->n, "integrate_drift", err)) != PD_OK) return rc;
     if (m->walls_move && (rc = sim_walls_at(m, (double)(m->step + 1) * m->dt, err)) != PD_OK)

@@ -223,6 +223,24 @@ PD_FN pd_real cp_sphere_mesh(const cp_world *wd, pd_v3 s, pd_real r, const np_bo
 }
 
 /*
+ * Whether the two particles of `key` are too far apart to touch or to cohere: their bounding
+ * spheres (circumradius; a sphere's radius), widened by the pair's cohesion range, do not meet.
+ * Most candidates of a reused pair list (the Verlet skin) end here, before their history is
+ * looked up. Walls: 0 (their pairs are decided by the wall's triangles).
+ */
+PD_FN int cp_apart(const cp_world *wd, ch_key key)
+{
+    int ia = (int)ch_first(key), ib = cp_body(wd, ch_second(key));
+    if (ib >= wd->nparticles) return 0;
+    PD_GLOBAL const pd_real *pr =
+        wd->params + CP_NPARAM * (wd->material[ia] * wd->nmat + wd->material[ib]);
+    pd_real reach = wd->radius_ratio[wd->shape[ia]] * wd->size[ia] +
+                    wd->radius_ratio[wd->shape[ib]] * wd->size[ib] + pr[CP_LE];
+    pd_v3 d = v3_sub(v3_load(wd->x, ib), v3_load(wd->x, ia));
+    return v3_dot(d, d) > reach * reach;
+}
+
+/*
  * Evaluates pair `key` with last step's tangential state (spring0, kt0; zero for a new pair).
  * in/rscr: the overlap scratch of this work-item (ovl_in's iscr, rscr, pts_cap).
  */

@@ -21,11 +21,14 @@ __kernel void integrate_kick(__global pd_real *v, __global pd_real *L, __global 
  * Drift: x += v dt, and q turned by Euler's equations at constant L; omega receives the world
  * angular velocity at the new orientation (what the contact stage uses for surface velocities).
  * A particle whose position, velocity or angular momentum is not finite is reported by the
- * lowest such index in *bad (atomic_min: the host names the first one).
+ * lowest such index in status[1] (atomic_min: the host names the first one). A particle that has
+ * moved more than half the broad phase's skin from x_ref (its position when the pair list was
+ * built) sets status[0]: the list must be built again (sim_step.c).
  */
 __kernel void integrate_drift(__global pd_real *x, __global const pd_real *v, __global pd_real *q,
                               __global const pd_real *L, __global const pd_real *inv_i,
-                              __global pd_real *omega, int n, pd_real dt, __global int *bad)
+                              __global pd_real *omega, int n, pd_real dt, __global int *status,
+                              __global const pd_real *x_ref, pd_real half_skin2)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
@@ -41,5 +44,7 @@ __kernel void integrate_drift(__global pd_real *x, __global const pd_real *v, __
     pd_v3 wb = int_omega_body(r, Li, ii);
     v3_store(omega, i, q4_rotate(r, wb));
     pd_real s = xi.x + xi.y + xi.z + v3_dot(v3_load(v, i), v3(1, 1, 1)) + Li.x + Li.y + Li.z;
-    if (!isfinite(s)) atomic_min(bad, i);
+    if (!isfinite(s)) atomic_min(status + 1, i);
+    pd_v3 moved = v3_sub(xi, v3_load(x_ref, i));
+    if (!(v3_dot(moved, moved) <= half_skin2)) atomic_or(status, 1);
 }

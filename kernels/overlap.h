@@ -292,6 +292,7 @@ PD_FN void ovl_pass(ovl_ctx *c)
 {
     PD_GLOBAL const int *ta = c->in->ta;
     PD_GLOBAL const int *tb = c->in->tb;
+    int open_b = (c->in->flags & OVL_OPEN_B) != 0;
     c->vol = PD_R(0);
     c->moment = c->area_a = c->area_b = v3(0, 0, 0);
     c->origin_in_b = -1; /* its ties follow c->flip */
@@ -318,9 +319,10 @@ PD_FN void ovl_pass(ovl_ctx *c)
             ovl_cusp(c, T.p[q], T.e[q], T.m[q], T.nu, 0);
             ovl_cusp(c, T.p[q], v3_scale(T.e[qp], PD_R(-1)), T.m[qp], T.nu, 0);
         }
-        /* T beside all of B's near triangles meets none of them */
-        if (T.hi.x < c->nblo.x || c->nbhi.x < T.lo.x || T.hi.y < c->nblo.y || c->nbhi.y < T.lo.y ||
-            T.hi.z < c->nblo.z || c->nbhi.z < T.lo.z)
+        /* B open (a wall's part): A is not filtered, so most of its triangles lie beside all
+         * of B's near ones; between particles the box where the kept parts meet did that */
+        if (open_b && (T.hi.x < c->nblo.x || c->nbhi.x < T.lo.x || T.hi.y < c->nblo.y ||
+                       c->nbhi.y < T.lo.y || T.hi.z < c->nblo.z || c->nbhi.z < T.lo.z))
             continue;
         for (int l = 0; l < c->nb; l++) {
             PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
@@ -591,10 +593,12 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         ovl_tri_make(&U, ovl_vb(c, in->tb[3 * u]), ovl_vb(c, in->tb[3 * u + 1]),
                      ovl_vb(c, in->tb[3 * u + 2]), PD_R(0));
         if (c->filter && !ovl_box_meets(c, &U)) continue;
-        c->nblo = v3(pd_min(c->nblo.x, U.lo.x - c->pad), pd_min(c->nblo.y, U.lo.y - c->pad),
-                     pd_min(c->nblo.z, U.lo.z - c->pad));
-        c->nbhi = v3(pd_max(c->nbhi.x, U.hi.x + c->pad), pd_max(c->nbhi.y, U.hi.y + c->pad),
-                     pd_max(c->nbhi.z, U.hi.z + c->pad));
+        if (open_b) {
+            c->nblo = v3(pd_min(c->nblo.x, U.lo.x - c->pad), pd_min(c->nblo.y, U.lo.y - c->pad),
+                         pd_min(c->nblo.z, U.lo.z - c->pad));
+            c->nbhi = v3(pd_max(c->nbhi.x, U.hi.x + c->pad), pd_max(c->nbhi.y, U.hi.y + c->pad),
+                         pd_max(c->nbhi.z, U.hi.z + c->pad));
+        }
         /* cache what the pair loop needs of U, with the box padded by the resolution */
         ovl_tri_edges(&U);
         PD_GLOBAL pd_real *uc = c->ucache + OVL_TRI_CACHE * c->nb;
