@@ -58,7 +58,7 @@ typedef struct sim {
     /* broad phase */
     cl_mem pbox, wbox, tbox, left, right, parent, arrivals, codes, idx, codes_tmp, idx_tmp;
     cl_mem count, offset, status;
-    cl_mem cand; /* broad phase: the first 16 partners of each particle, found while counting */
+    cl_mem cand; /* broad phase: the first BVH_CAND partners of each particle, while counting */
     cl_mem old_offset; /* last step's offsets: where each particle's pairs begin in old.keys */
     /* [1]: lowest particle found not finite, [2]: lowest particle * nwall + wall with more
      * wall triangles near it than wall_cap (kernels/contact_pair.h); INT_MAX when none */

@@ -7,6 +7,7 @@
 #include <string.h>
 
 #define PD_DOUBLE 1
+#include "bvh.h"          /* BVH_CAND */
 #include "contact_pair.h" /* cp_* parameter layout, overlap scratch sizes, force-law helpers */
 #include "overlap_run.h"
 #include "sim.h"
@@ -580,7 +581,7 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->count = mk(m, sizeof(int) * n, &ok, &e);
     m->offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->old_offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
-    m->cand = mk(m, sizeof(int) * 16 * n, &ok, &e);
+    m->cand = mk(m, sizeof(int) * BVH_CAND * n, &ok, &e);
     m->status = mk(m, sizeof(int) * 3, &ok, &e);
     m->x_ref = mk(m, rs * 3 * n, &ok, &e);
     m->second_count = mk(m, sizeof(int) * n, &ok, &e);

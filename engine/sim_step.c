@@ -48,7 +48,7 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     cl_int e = CL_SUCCESS;
     cl_context ctx = m->dev->ctx;
     if (need > m->cur.cap || !m->cur.keys) {
-        size_t cap = need + need / 2 + 1024;
+        size_t cap = need + need / 4 + 1024; /* a pair list changes only when rebuilt */
         m->bytes += (double)(cap - m->cur.cap) * (sizeof(cl_ulong) + 4 * m->rs);
         if (m->cur.keys) clReleaseMemObject(m->cur.keys);
         if (m->cur.spring) clReleaseMemObject(m->cur.spring);
@@ -64,7 +64,7 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
         m->cur.cap = cap;
     }
     if (need > m->work_cap || !m->force) {
-        size_t cap = need + need / 2 + 1024;
+        size_t cap = need + need / 4 + 1024; /* a pair list changes only when rebuilt */
         cl_mem *b[] = {&m->force, &m->point, &m->info, &m->ids, &m->second_list};
         size_t sz[] = {m->rs * 3, m->rs * 3, m->rs * 2, sizeof(int), sizeof(int)};
         m->bytes += (double)(cap - m->work_cap) * (8 * m->rs + 2 * sizeof(int));

@@ -76,7 +76,7 @@ PD_FN int brute_after(__global const pd_real *pbox, int n, const pd_real *q, int
  * partners are kept in cand[i * BROAD_CAP ..], so broad_write traverses again only for particles
  * with more.
  */
-#define BROAD_CAP 16
+#define BROAD_CAP BVH_CAND
 __kernel void broad_count(__global const pd_real *box, __global const int *left,
                           __global const int *right, __global const int *idx, int n,
                           __global const pd_real *pbox, __global const pd_real *wbox, int nwall,

@@ -27,6 +27,11 @@ typedef uint64_t bvh_code;
 #define BVH_CLZ64(x) ((x) ? __builtin_clzll(x) : 64)
 #endif
 
+/* Partners the broad phase's counting pass keeps per particle (broad_phase.cl), so its writing
+ * pass traverses again only for particles with more: enough for a packing's neighbours above a
+ * particle, 32 bytes of device memory per particle. */
+#define BVH_CAND 8
+
 /* depth bound: prefixes of 63 code bits plus up to 32 index bits on equal codes */
 #define BVH_STACK 128
 
