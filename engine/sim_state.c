@@ -161,7 +161,7 @@ static int upload_wall_trees(sim *m, const double *vert, const int *tri, const i
         free(noff);
         return pd_error_set(err, PD_ENOMEM, "run: out of memory for the walls' trees");
     }
-    /* the cube's half-side: the largest circumradius, widened as np_wall_local does, plus its
+    /* the cube's half-side: the largest circumradius, widened as wb_reach_box does, plus its
      * rounding allowance at ten times the scene's largest coordinate */
     double reach = 0, far = 0, eps = m->dbl ? 2.220446049250313e-16 : 1.1920929e-7;
     for (long i = 0; i < m->p->n; i++) {

@@ -66,22 +66,18 @@ contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *o
     __global pd_real *rs = rscr + (size_t)g * (size_t)rlen;
     for (int c = g; c < npairs; c += nwork) {
         ch_key k = keys[c];
-        if (cp_apart(&wd, k)) { /* no force, no history */
-            v3_store(force, c, v3(0, 0, 0));
-            v3_store(point, c, v3(0, 0, 0));
-            v3_store(spring, c, v3(0, 0, 0));
-            kt[c] = 0;
-            info[2 * c] = info[2 * c + 1] = 0;
-            continue;
-        }
-        /* last step's pairs of the same first body: a few entries to search, not all */
-        int lo = old_offset[ch_first(k)],
-            j = ch_find(old_keys + lo, old_offset[ch_first(k) + 1] - lo, k);
-        j = j >= 0 ? lo + j : -1;
-        pd_v3 s0 = j >= 0 ? v3_load(old_spring, j) : v3(0, 0, 0);
-        pd_real kt0 = j >= 0 ? old_kt[j] : PD_R(0);
         cp_result r;
-        cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, &r);
+        if (cp_apart(&wd, k)) {
+            cp_none(&r); /* no force, and no history to look up */
+        } else {
+            /* last step's pairs of the same first body: a few entries to search, not all */
+            int lo = old_offset[ch_first(k)],
+                j = ch_find(old_keys + lo, old_offset[ch_first(k) + 1] - lo, k);
+            j = j >= 0 ? lo + j : -1;
+            pd_v3 s0 = j >= 0 ? v3_load(old_spring, j) : v3(0, 0, 0);
+            pd_real kt0 = j >= 0 ? old_kt[j] : PD_R(0);
+            cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, &r);
+        }
         v3_store(force, c, r.force);
         v3_store(point, c, r.point);
         v3_store(spring, c, r.spring);

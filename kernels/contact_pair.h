@@ -183,8 +183,9 @@ PD_FN pd_real cp_sphere_mesh(const cp_world *wd, pd_v3 s, pd_real r, const np_bo
     PD_GLOBAL const int *tri = wd->sh.tri + 3 * wd->sh.toff[sh];
     int nt = wd->sh.toff[sh + 1] - wd->sh.toff[sh];
     if (tree) {
-        pd_real h = reach * (PD_R(1) + PD_R(1e-5)) + PD_R(64) * PD_EPS * v3_amax(p);
-        nt = wb_query_box(tree, v3_sub(p, v3(h, h, h)), v3_add(p, v3(h, h, h)), iscr, cap);
+        pd_v3 lo, hi;
+        wb_reach_box(p, reach, &lo, &hi);
+        nt = wb_query_box(tree, lo, hi, iscr, cap);
         if (nt < 0 || nt > cap) *overflow = 1;
         if (nt <= 0 || nt > cap) return -PD_REAL_MAX;
     }
@@ -240,8 +241,19 @@ PD_FN int cp_apart(const cp_world *wd, ch_key key)
     return v3_dot(d, d) > reach * reach;
 }
 
+/* A pair that does not touch: no force, no history. */
+PD_FN void cp_none(cp_result *res)
+{
+    res->force = res->spring = res->point = v3(0, 0, 0);
+    res->kt = 0;
+    res->touching = 0;
+    res->ratio = 0;
+}
+
 /*
  * Evaluates pair `key` with last step's tangential state (spring0, kt0; zero for a new pair).
+ * Callers drop the pairs cp_apart rejects first (without their overlap, about half of a
+ * polyhedral bed's candidates, and most of a reused list's).
  * in/rscr: the overlap scratch of this work-item (ovl_in's iscr, rscr, pts_cap).
  */
 PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, PD_GLOBAL int *iscr,
@@ -258,11 +270,7 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
     int wall_b = ib >= wd->nparticles;
     pd_real smin = wall_b ? a.size : pd_min(a.size, b.size);
 
-    res->force = res->spring = v3(0, 0, 0);
-    res->kt = 0;
-    res->touching = 0;
-    res->ratio = 0;
-    res->point = v3(0, 0, 0);
+    cp_none(res);
 
     /* geometry: normal n from a into b, overlap delta (negative: gap), contact point c */
     pd_v3 n, c;
@@ -293,13 +301,6 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         rstar = r;
         cohesive = 1;
     } else {
-        /* the broad phase's boxes are cubes around the bounding spheres: pairs whose spheres
-         * are apart (about half of them) need no overlap computation */
-        if (!wall_b) {
-            pd_real reach = wd->radius_ratio[a.shape] * a.size + wd->radius_ratio[b.shape] * b.size;
-            pd_v3 d = v3_sub(b.x, a.x);
-            if (v3_dot(d, d) > reach * reach) return;
-        }
         ovl_in in;
         pd_real ra[9];
         np_setup(&wd->sh, &a, &b, 0, &in, ra);

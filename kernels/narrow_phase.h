@@ -110,15 +110,10 @@ PD_FN int np_wall_rlen(int cap)
 PD_FN int np_wall_local(const wb_tree *w, pd_real reach, int cap, PD_GLOBAL int *iscr,
                         PD_GLOBAL pd_real *rscr, ovl_in *in)
 {
-    const pd_real *R = in->rot, *t = in->tr;
-    /* a's centroid in the wall's frame: rot^T (0 - tr) */
-    pd_v3 o =
-        v3(-(R[0] * t[0] + R[3] * t[1] + R[6] * t[2]), -(R[1] * t[0] + R[4] * t[1] + R[7] * t[2]),
-           -(R[2] * t[0] + R[5] * t[1] + R[8] * t[2]));
-    /* widened well beyond the rounding of o (the host's cap allows for this widening) */
-    pd_real h = reach * (PD_R(1) + PD_R(1e-5)) + PD_R(64) * PD_EPS * v3_amax(o);
+    pd_v3 qlo, qhi; /* a's circumsphere's cube in the wall's frame */
+    wb_reach_box(ovl_a_centroid_in_b(in), reach, &qlo, &qhi);
     PD_GLOBAL int *lt = iscr, *lv = iscr + cap, *ltri = iscr + 4 * cap;
-    int nt = wb_query_box(w, v3_sub(o, v3(h, h, h)), v3_add(o, v3(h, h, h)), lt, cap);
+    int nt = wb_query_box(w, qlo, qhi, lt, cap);
     if (nt < 0 || nt > cap) return -1;
     if (nt == 0) return 0;
     ovl_sort(lt, nt);

@@ -353,6 +353,16 @@ PD_FN int ovl_tree_parity(ovl_ctx *c, const wb_tree *w, const ovl_in *map, pd_v3
     return odd;
 }
 
+/* A's centroid (the origin of A's frame) in B's frame, rot^T (0 - tr): exact to rounding when B
+ * has size 1 (rot a rotation), as walls have. */
+PD_FN pd_v3 ovl_a_centroid_in_b(const ovl_in *in)
+{
+    const pd_real *R = in->rot, *t = in->tr;
+    return v3(-(R[0] * t[0] + R[3] * t[1] + R[6] * t[2]),
+              -(R[1] * t[0] + R[4] * t[1] + R[7] * t[2]),
+              -(R[2] * t[0] + R[5] * t[1] + R[8] * t[2]));
+}
+
 /* OVL_OPEN_B: whether A's centroid (the origin) lies inside the whole wall: the parity of the
  * ray along -d through the wall's tree (mapped back by rot^T: a wall has size 1). */
 PD_FN int ovl_origin_in_b(ovl_ctx *c)
@@ -360,10 +370,7 @@ PD_FN int ovl_origin_in_b(ovl_ctx *c)
     if (c->origin_in_b >= 0) return c->origin_in_b;
     const ovl_in *in = c->in;
     const pd_real *R = in->rot;
-    pd_v3 r = v3_scale(c->d, PD_R(-1));
-    pd_v3 o = v3(-(R[0] * in->tr[0] + R[3] * in->tr[1] + R[6] * in->tr[2]),
-                 -(R[1] * in->tr[0] + R[4] * in->tr[1] + R[7] * in->tr[2]),
-                 -(R[2] * in->tr[0] + R[5] * in->tr[1] + R[8] * in->tr[2]));
+    pd_v3 r = v3_scale(c->d, PD_R(-1)), o = ovl_a_centroid_in_b(in);
     pd_v3 rw = v3(R[0] * r.x + R[3] * r.y + R[6] * r.z, R[1] * r.x + R[4] * r.y + R[7] * r.z,
                   R[2] * r.x + R[5] * r.y + R[8] * r.z);
     c->origin_in_b = ovl_tree_parity(c, &in->wall, in, v3(0, 0, 0), r, o, rw);

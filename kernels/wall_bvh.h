@@ -27,6 +27,19 @@ typedef struct wb_tree {
     PD_GLOBAL const int *tri;      /* its triangles */
 } wb_tree;
 
+/*
+ * The box the narrow phase searches around point o (a wall's frame) for what lies within `reach`
+ * of it: the cube of half-side reach, widened well beyond the rounding of o and reach (relative
+ * 1e-5 of reach plus 64 ulps of o). The host's bound on near triangles (wall_tree_max_near, its
+ * caller in sim_state.c) allows for this widening.
+ */
+PD_FN void wb_reach_box(pd_v3 o, pd_real reach, pd_v3 *lo, pd_v3 *hi)
+{
+    pd_real h = reach * (PD_R(1) + PD_R(1e-5)) + PD_R(64) * PD_EPS * v3_amax(o);
+    *lo = v3_sub(o, v3(h, h, h));
+    *hi = v3_add(o, v3(h, h, h));
+}
+
 /* No tree (ovl_in.wall of a closed B). */
 PD_FN void wb_tree_none(wb_tree *w)
 {

@@ -185,9 +185,12 @@ static double cube_side(double d)
     return cbrt(PI / 6) * d;
 }
 
-static void cube_json(char *json, size_t len, double dt, double z, double vx, double mu,
-                      double damping)
+/* A 0.02 m cube at `at` (m) sliding along x at vx on a floor: `floor` is the wall's JSON after its
+ * name and material (NULL: a 2 x 2 x 0.1 m box under z = 0). */
+static void cube_json(char *json, size_t len, double dt, const double at[3], double vx, double mu,
+                      double damping, const char *floor)
 {
+    if (!floor) floor = "\"box\": {\"min\": [-1, -1, -0.1], \"max\": [1, 1, 0]}";
     snprintf(json, len,
              "{\"name\": \"cube\", \"allow_unstable_dt\": true,"
              " \"time\": {\"dt\": %.17g, \"duration\": 1, \"output_interval\": 1},"
@@ -198,10 +201,10 @@ static void cube_json(char *json, size_t len, double dt, double z, double vx, do
              "%g}],"
              " \"shapes\": {\"c\": {\"builtin\": \"cube\"}},"
              " \"particles\": [{\"shape\": \"c\", \"material\": \"m\", \"list\": ["
-             " {\"position\": [0, 0, %.17g], \"velocity\": [%g, 0, 0], \"size\": 0.02}]}],"
-             " \"walls\": [{\"name\": \"floor\", \"material\": \"m\", \"box\": {\"min\": [-1, -1, "
-             "-0.1], \"max\": [1, 1, 0]}}]}",
-             dt, mu, damping, z, vx);
+             " {\"position\": [%.17g, %.17g, %.17g], \"velocity\": [%g, 0, 0], \"size\": "
+             "0.02}]}],"
+             " \"walls\": [{\"name\": \"floor\", \"material\": \"m\", %s}]}",
+             dt, mu, damping, at[0], at[1], at[2], vx, floor);
 }
 
 /* Equilibrium depth of a cube of side s (density rho) resting flat: m g = 4/(3 sqrt(pi)) E*
@@ -221,8 +224,9 @@ TEST(cube_rests_flat_on_wall)
     double want = cube_rest_depth(s, 2600, estar);
     double m = 2600 * s * s * s, kn = 2 * estar * s; /* eq. 4.17 with V/delta = s^2 */
     double period = 2 * PI * sqrt(m / kn), dt = period / 100;
-    char json[1500];
-    cube_json(json, sizeof json, dt, 0.5 * s + 0.5 * want, 0, 0.5, 0.5);
+    char json[2000];
+    double at[3] = {0, 0, 0.5 * s + 0.5 * want};
+    cube_json(json, sizeof json, dt, at, 0, 0.5, 0.5, NULL);
     run r;
     if (start(&r, json)) return;
     for (int i = 0; i < 6000; i++)
@@ -244,8 +248,9 @@ TEST(cube_slides_to_rest)
     double s = cube_side(0.02), estar = 1e7 / (2 * (1 - 0.25 * 0.25));
     double rest = cube_rest_depth(s, 2600, estar), m = 2600 * s * s * s, kn = 2 * estar * s;
     double period = 2 * PI * sqrt(m / kn), dt = period / 50;
-    char json[1500];
-    cube_json(json, sizeof json, dt, 0.5 * s - rest, u0, mu, 0.5);
+    char json[2000];
+    double at[3] = {0, 0, 0.5 * s - rest};
+    cube_json(json, sizeof json, dt, at, u0, mu, 0.5, NULL);
     run r;
     if (start(&r, json)) return;
     double t_stop = u0 / (mu * g), want = u0 * u0 / (2 * mu * g);
@@ -276,20 +281,9 @@ static double slide_on(const char *floor_json, double *speed)
     double rest = cube_rest_depth(s, 2600, estar), m = 2600 * s * s * s, kn = 2 * estar * s;
     double period = 2 * PI * sqrt(m / kn), dt = period / 50;
     char json[2000];
-    snprintf(json, sizeof json,
-             "{\"name\": \"cube\", \"allow_unstable_dt\": true,"
-             " \"time\": {\"dt\": %.17g, \"duration\": 1, \"output_interval\": 1},"
-             " \"gravity\": [0, 0, -9.81],"
-             " \"materials\": {\"m\": {\"density\": 2600, \"youngs_modulus\": 1e7, "
-             "\"poisson_ratio\": 0.25}},"
-             " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": %g, "
-             "\"damping\": 0.5}],"
-             " \"shapes\": {\"c\": {\"builtin\": \"cube\"}},"
-             " \"particles\": [{\"shape\": \"c\", \"material\": \"m\", \"list\": ["
-             " {\"position\": [0.0013, 0.0021, %.17g], \"velocity\": [%g, 0, 0], \"size\": "
-             "0.02}]}],"
-             " \"walls\": [{\"name\": \"floor\", \"material\": \"m\", %s}]}",
-             dt, mu, 0.5 * s - rest, u0, floor_json);
+    /* off the grid's lines, so the cube's edges cross the floor's edges all the way */
+    double at[3] = {0.0013, 0.0021, 0.5 * s - rest};
+    cube_json(json, sizeof json, dt, at, u0, mu, 0.5, floor_json);
     run r;
     if (start(&r, json)) return NAN;
     int n = (int)(1.3 * u0 / (mu * g) / dt);
@@ -330,7 +324,8 @@ TEST(cube_slides_on_a_finely_meshed_floor)
 TEST(particle_inside_wall_is_refused)
 {
     char json[1500];
-    cube_json(json, sizeof json, 1e-5, -0.05, 0, 0.5, 0.5);
+    double inside[3] = {0, 0, -0.05}, sunk[3] = {0, 0, 0.001}; /* sunk 9 mm into the floor */
+    cube_json(json, sizeof json, 1e-5, inside, 0, 0.5, 0.5, NULL);
     pd_scenario *s = NULL;
     pd_diags d = {0, 0, NULL};
     pd_error err = {0};
@@ -342,7 +337,7 @@ TEST(particle_inside_wall_is_refused)
     CHECK(strstr(err.msg, "particle 0") && strstr(err.msg, "inside wall 'floor'"));
     CHECK(m == NULL);
     pd_scenario_destroy(s);
-    cube_json(json, sizeof json, 1e-5, 0.001, 0, 0.5, 0.5); /* sunk 9 mm into the floor */
+    cube_json(json, sizeof json, 1e-5, sunk, 0, 0.5, 0.5, NULL);
     run r;
     if (start(&r, json)) return;
     finish(&r);
