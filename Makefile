@@ -59,7 +59,7 @@ $(BUILD)/libpolydem.a: $(ENGINE_OBJ)
 $(BUILD)/polydem: cli/polydem.c $(BUILD)/libpolydem.a
 	$(CC) $(CFLAGS) $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
 
-$(BUILD)/tests/%: tests/%.c tests/test.h $(BUILD)/libpolydem.a
+$(BUILD)/tests/%: tests/%.c $(wildcard tests/*.h) $(BUILD)/libpolydem.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) -Itests $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
 

@@ -88,15 +88,20 @@ static void scenario(char *json, size_t len, long n, int spheres, int dbl)
              0.001 + h, floor);
 }
 
+static long certified; /* pairs the last step skipped as certified apart (info -2) */
+
 static long count_contacts(sim *m)
 {
     long c = 0;
-    size_t np = (size_t)m->n_old;
-    double *info = malloc(sizeof(double) * 2 * (np + 1));
+    size_t np = (size_t)m->npairs;
+    double *info = malloc(sizeof(double) * (np + 1));
     pd_error err = {0};
-    if (info && sim_read(m, m->info, 0, 2 * np, info, &err) == PD_OK)
-        for (size_t i = 0; i < np; i++)
-            c += info[2 * i] != 0;
+    certified = 0;
+    if (info && sim_read(m, m->info, 0, np, info, &err) == PD_OK)
+        for (size_t i = 0; i < np; i++) {
+            c += info[i] >= 0; /* depth / size when touching, -1 when not, -2 certified apart */
+            certified += info[i] == -2;
+        }
     free(info);
     return c;
 }
@@ -129,15 +134,15 @@ static int traversal_compare(sim *m, int reps)
     clFinish(dev->queue);
     double t_dfs = (now() - t0) / reps;
     int *cnt = malloc(sizeof(int) * (size_t)n);
-    cl_ulong *keys = malloc(sizeof(cl_ulong) * ((size_t)m->n_old + 1));
+    cl_ulong *keys = malloc(sizeof(cl_ulong) * ((size_t)m->npairs + 1));
     long dfs = 0, walls = 0, bfs = 0;
     if (rc == PD_OK && cnt && keys) {
         clEnqueueReadBuffer(dev->queue, m->count, CL_TRUE, 0, sizeof(int) * n, cnt, 0, NULL, NULL);
-        clEnqueueReadBuffer(dev->queue, m->old.keys, CL_TRUE, 0, sizeof(cl_ulong) * m->n_old, keys,
-                            0, NULL, NULL);
+        clEnqueueReadBuffer(dev->queue, m->pairs.keys, CL_TRUE, 0, sizeof(cl_ulong) * m->npairs,
+                            keys, 0, NULL, NULL);
         for (int i = 0; i < n; i++)
             dfs += cnt[i];
-        for (int k = 0; k < m->n_old; k++)
+        for (int k = 0; k < m->npairs; k++)
             walls += (keys[k] & 0xffffffffu) >= 0x80000000u; /* CH_WALL: walls' ids */
     }
     /* breadth first */
@@ -286,12 +291,17 @@ static int bench_case(pd_device *dev, long n, int spheres, int dbl, int settle, 
     for (int k = 0; k < SIM_NSTAGES; k++)
         total += m->stage_seconds[k];
     printf("%-10s %8ld %9.3g %10.3g %9ld %9d %10.3g %8.0f |", spheres ? "spheres" : "schonhardt", n,
-           1e3 * per_step, (double)n / per_step, contacts, m->n_old,
+           1e3 * per_step, (double)n / per_step, contacts, m->npairs,
            contacts ? 1e6 * per_step / contacts : 0, m->bytes / n);
     for (int k = 0; k < SIM_NSTAGES; k++)
         printf(" %5.1f", 100 * m->stage_seconds[k] / total);
-    printf("\n  pair list built in %lld of the %d timed steps (skin %.3g m)\n", built, steps,
-           m->skin);
+    /* the overlap scratch follows the device's parallelism (nwork work-items), not N */
+    double scratch = (double)m->nwork * ((double)sizeof(int) * m->ilen + (double)m->rs * m->rlen);
+    printf("\n  pair list built in %lld of the %d timed steps (skin %.3g m); %.3g candidate pairs "
+           "per particle, %ld skipped as certified apart in the last; %.0f bytes per particle "
+           "besides the %.2f MB of overlap scratch\n",
+           built, steps, m->skin, (double)m->npairs / n, certified, (m->bytes - scratch) / n,
+           scratch / 1048576);
     if (getenv("BENCH_DUMP")) { /* positions, for comparing runs */
         double *x = malloc(sizeof(double) * 3 * (size_t)n);
         if (x && sim_read(m, m->x, 0, 3 * (size_t)n, x, &err) == PD_OK) {

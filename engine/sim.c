@@ -79,14 +79,14 @@ static double kinetic_energy(const sim *m, const run_host *h, int *max_particle)
 /* Contacts, largest overlap ratio and wall forces from the last step's pairs. */
 static int contact_stats(sim *m, run_host *h, long *contacts, double *max_ratio, pd_error *err)
 {
-    size_t np = (size_t)m->n_old;
+    size_t np = (size_t)m->npairs;
     if (np > h->pair_cap) {
         free(h->keys);
         free(h->force);
         free(h->info);
         h->keys = malloc(sizeof(cl_ulong) * np);
         h->force = malloc(sizeof(double) * 3 * np);
-        h->info = malloc(sizeof(double) * 2 * np);
+        h->info = malloc(sizeof(double) * np);
         h->pair_cap = h->keys && h->force && h->info ? np : 0;
         if (!h->pair_cap) return pd_error_set(err, PD_ENOMEM, "run: out of memory for stats");
     }
@@ -94,15 +94,15 @@ static int contact_stats(sim *m, run_host *h, long *contacts, double *max_ratio,
     *max_ratio = 0;
     memset(h->wall_force, 0, sizeof(double) * 3 * (size_t)(m->nwall + 1));
     if (np == 0) return PD_OK;
-    cl_int e = clEnqueueReadBuffer(m->dev->queue, m->old.keys, CL_TRUE, 0, sizeof(cl_ulong) * np,
+    cl_int e = clEnqueueReadBuffer(m->dev->queue, m->pairs.keys, CL_TRUE, 0, sizeof(cl_ulong) * np,
                                    h->keys, 0, NULL, NULL);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(keys)", e);
     int rc = sim_read(m, m->force, 0, 3 * np, h->force, err);
-    if (rc == PD_OK) rc = sim_read(m, m->info, 0, 2 * np, h->info, err);
+    if (rc == PD_OK) rc = sim_read(m, m->info, 0, np, h->info, err);
     if (rc != PD_OK) return rc;
     for (size_t c = 0; c < np; c++) {
-        if (h->info[2 * c] != 0) (*contacts)++;
-        if (h->info[2 * c + 1] > *max_ratio) *max_ratio = h->info[2 * c + 1];
+        if (h->info[c] >= 0) (*contacts)++; /* depth / size when touching, -1 when not */
+        if (h->info[c] > *max_ratio) *max_ratio = h->info[c];
         unsigned second = (unsigned)(h->keys[c] & 0xffffffffu);
         if (second >= CH_WALL) /* the force on the wall, summed in key order */
             for (int k = 0; k < 3; k++)
@@ -255,8 +255,8 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
             double ratio;
             if ((rc = contact_stats(m, &h, &contacts, &ratio, err)) != PD_OK) goto done;
             pr.contacts = contacts;
-            pr.broad_pairs = m->n_old;
-            rc = rh5_write_stats(w, t, step, pr.kinetic_energy, contacts, m->n_old, ratio,
+            pr.broad_pairs = m->npairs;
+            rc = rh5_write_stats(w, t, step, pr.kinetic_energy, contacts, m->npairs, ratio,
                                  now_seconds() - t_start, m->nwall ? h.wall_force : NULL, err);
             if (rc != PD_OK) goto done;
         }

@@ -9,13 +9,14 @@
  *
  * A step (sim_step.c), all on the device:
  *   kick (dt/2) -> drift -> [walls moved] -> forces -> kick (dt/2)
- * where forces = boxes -> Morton codes -> radix sort -> LBVH nodes -> refit -> traversal
- * (count, scan, write: sorted keys) -> contact forces with history -> gather by particle
- * (contacts as second body counted and listed, then summed in key order). The broad phase
- * (boxes to traversal) runs only when the pair list is stale: boxes carry a Verlet skin, and the
- * last list is reused until a particle has moved half of it (see `skin` below).
- * The host reads one int per step (the number of candidate pairs, to size the pair arrays) and
- * the divergence flag; everything else stays on the device until a stats row or frame is due.
+ * where forces = [history kept -> boxes -> Morton codes -> radix sort -> LBVH nodes -> refit ->
+ * traversal (count, scan, write: sorted keys)] -> contact forces with history -> gather by
+ * particle ([contacts as second body counted and listed], then summed in key order). The
+ * bracketed parts run only when the pair list is stale: boxes carry a Verlet skin, and the last
+ * list is reused until a particle has moved half of it (see `skin` below).
+ * On a rebuild the host reads the number of carried and of candidate pairs (to size arrays);
+ * on every step the divergence and wall flags. Everything else stays on the device until a
+ * stats row or frame is due.
  */
 #ifndef PD_SIM_H
 #define PD_SIM_H
@@ -25,9 +26,10 @@
 #include "particles.h"
 #include "scenario.h"
 
+/* Pairs sorted by key with their tangential state (kernels/contact_history.h). */
 typedef struct sim_pairs {
-    cl_mem keys, spring, kt; /* these three carry over as the next step's history */
-    size_t cap;              /* capacity in pairs */
+    cl_mem keys, spring, kt;
+    size_t cap; /* capacity in pairs */
 } sim_pairs;
 
 typedef struct sim {
@@ -59,7 +61,7 @@ typedef struct sim {
     cl_mem pbox, wbox, tbox, left, right, parent, arrivals, codes, idx, codes_tmp, idx_tmp;
     cl_mem count, offset, status;
     cl_mem cand; /* broad phase: the first BVH_CAND partners of each particle, while counting */
-    cl_mem old_offset; /* last step's offsets: where each particle's pairs begin in old.keys */
+    cl_mem carry_offset; /* where each particle's carried pairs begin in carry.keys */
     /* [1]: lowest particle found not finite, [2]: lowest particle * nwall + wall with more
      * wall triangles near it than wall_cap (kernels/contact_pair.h); INT_MAX when none */
     cl_int status_host[3];
@@ -71,12 +73,20 @@ typedef struct sim {
      */
     double skin;
     cl_mem x_ref;
+    cl_mem travel;    /* per particle: how far any of its points has moved since the list was built,
+                         at most (integrate.cl); separated pairs are skipped until it adds up to
+                         their certified gap (contact.cl) */
     int list_valid;   /* a list was built and nothing since invalidates it */
+    int list_fresh;   /* this step built the list (not reused): state comes from `carry` */
     long long builds; /* pair lists built so far (bench) */
-    /* pairs: current and last step's (history) */
-    sim_pairs cur, old;
-    int npairs, n_old;
-    cl_mem force, point, info, ids, second_list;
+    /*
+     * The pair list, its state updated in place while the list is reused; and, on the step a
+     * new list is built, the old list's pairs that carry state (ch_has_state), which the new
+     * pairs look themselves up in: one list's memory plus the touching pairs', not two lists'.
+     */
+    sim_pairs pairs, carry;
+    int npairs, ncarry;
+    cl_mem force, point, info, second_list;
     cl_mem second_count, second_off; /* per particle: contacts as second body, their offsets */
     size_t work_cap;                 /* capacity of the per-pair work arrays above */
     /* overlap scratch, per contact work-item */
@@ -84,7 +94,7 @@ typedef struct sim {
     int ilen, rlen, pts_cap, nwork;
     /* kernels */
     cl_kernel k_boxes, k_codes, k_leaves, k_nodes, k_refit, k_count, k_write, k_contact,
-        k_second_count, k_second_fill, k_body, k_kick, k_drift;
+        k_hist_count, k_hist_keep, k_second_count, k_second_fill, k_body, k_kick, k_drift;
     dsort sort;
     /* profiling (bench/step): when set, every stage ends with clFinish and its wall time is
      * added to stage_seconds[SIM_STAGE_*] */

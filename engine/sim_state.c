@@ -487,6 +487,8 @@ static const char *const kernel_names[][2] = {
     {"broad_phase", "broad_count"},
     {"broad_phase", "broad_write"},
     {"contact", "contact_forces"},
+    {"contact", "history_count"},
+    {"contact", "history_keep"},
     {"forces", "second_count"},
     {"forces", "second_fill"},
     {"forces", "body_forces"},
@@ -496,10 +498,10 @@ static const char *const kernel_names[][2] = {
 
 static cl_kernel *kernel_slot(sim *m, int i)
 {
-    cl_kernel *slots[] = {&m->k_boxes,        &m->k_codes,       &m->k_leaves, &m->k_nodes,
-                          &m->k_refit,        &m->k_count,       &m->k_write,  &m->k_contact,
-                          &m->k_second_count, &m->k_second_fill, &m->k_body,   &m->k_kick,
-                          &m->k_drift};
+    cl_kernel *slots[] = {&m->k_boxes,      &m->k_codes,     &m->k_leaves,       &m->k_nodes,
+                          &m->k_refit,      &m->k_count,     &m->k_write,        &m->k_contact,
+                          &m->k_hist_count, &m->k_hist_keep, &m->k_second_count, &m->k_second_fill,
+                          &m->k_body,       &m->k_kick,      &m->k_drift};
     return slots[i];
 }
 
@@ -580,10 +582,11 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->idx_tmp = mk(m, sizeof(int) * n, &ok, &e);
     m->count = mk(m, sizeof(int) * n, &ok, &e);
     m->offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
-    m->old_offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
+    m->carry_offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->cand = mk(m, sizeof(int) * BVH_CAND * n, &ok, &e);
     m->status = mk(m, sizeof(int) * 3, &ok, &e);
     m->x_ref = mk(m, rs * 3 * n, &ok, &e);
+    m->travel = mk(m, rs * n, &ok, &e);
     m->second_count = mk(m, sizeof(int) * n, &ok, &e);
     m->second_off = mk(m, sizeof(int) * (n + 1), &ok, &e);
     if (!ok) {
@@ -614,16 +617,12 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
         dmin = fmin(dmin, m->p->size[i]);
     m->skin = 0.1 * dmin;
     if ((rc = upload_bodies(m, err)) != PD_OK) goto fail;
-    int zero = 0; /* no history before the first step: every particle's old segment is empty */
-    e = clEnqueueFillBuffer(dev->queue, m->old_offset, &zero, sizeof zero, 0, sizeof(int) * (n + 1),
-                            0, NULL, NULL);
-    if (e != CL_SUCCESS) {
-        rc = CL_FAIL(err, "clEnqueueFillBuffer(offsets)", e);
-        goto fail;
-    }
     cl_int status0[3] = {0, 0x7fffffff, 0x7fffffff}; /* INT_MAX: nothing found */
-    e = clEnqueueWriteBuffer(dev->queue, m->status, CL_TRUE, 0, sizeof status0, status0, 0, NULL,
-                             NULL);
+    double zd = 0; /* no travel yet (a zero real of either precision is all zero bytes) */
+    e = clEnqueueFillBuffer(dev->queue, m->travel, &zd, rs, 0, rs * n, 0, NULL, NULL);
+    if (e == CL_SUCCESS)
+        e = clEnqueueWriteBuffer(dev->queue, m->status, CL_TRUE, 0, sizeof status0, status0, 0,
+                                 NULL, NULL);
     if (e != CL_SUCCESS) {
         rc = CL_FAIL(err, "clEnqueueWriteBuffer(status)", e);
         goto fail;
@@ -645,25 +644,63 @@ static void release(cl_mem *b)
 void sim_destroy(sim *m)
 {
     if (!m) return;
-    cl_mem *bufs[] = {&m->x,          &m->q,           &m->v,
-                      &m->w,          &m->size,        &m->inv_m,
-                      &m->shape,      &m->material,    &m->L,
-                      &m->inv_i,      &m->f,           &m->t,
-                      &m->vert,       &m->tri,         &m->voff,
-                      &m->toff,       &m->vt_off,      &m->vt,
-                      &m->unit_vol,   &m->kind,        &m->radius_ratio,
-                      &m->params,     &m->wnode_box,   &m->wnode_kid,
-                      &m->wnode_off,  &m->wtri_order,  &m->pbox,
-                      &m->wbox,       &m->tbox,        &m->left,
-                      &m->right,      &m->parent,      &m->arrivals,
-                      &m->codes,      &m->idx,         &m->codes_tmp,
-                      &m->idx_tmp,    &m->count,       &m->offset,
-                      &m->old_offset, &m->status,      &m->x_ref,
-                      &m->cur.keys,   &m->cur.spring,  &m->cur.kt,
-                      &m->old.keys,   &m->old.spring,  &m->old.kt,
-                      &m->force,      &m->point,       &m->info,
-                      &m->ids,        &m->second_list, &m->second_count,
-                      &m->second_off, &m->iscr,        &m->rscr};
+    cl_mem *bufs[] = {&m->x,
+                      &m->q,
+                      &m->v,
+                      &m->w,
+                      &m->size,
+                      &m->inv_m,
+                      &m->shape,
+                      &m->material,
+                      &m->L,
+                      &m->inv_i,
+                      &m->f,
+                      &m->t,
+                      &m->vert,
+                      &m->tri,
+                      &m->voff,
+                      &m->toff,
+                      &m->vt_off,
+                      &m->vt,
+                      &m->unit_vol,
+                      &m->kind,
+                      &m->radius_ratio,
+                      &m->params,
+                      &m->wnode_box,
+                      &m->wnode_kid,
+                      &m->wnode_off,
+                      &m->wtri_order,
+                      &m->pbox,
+                      &m->wbox,
+                      &m->tbox,
+                      &m->left,
+                      &m->right,
+                      &m->parent,
+                      &m->arrivals,
+                      &m->codes,
+                      &m->idx,
+                      &m->codes_tmp,
+                      &m->idx_tmp,
+                      &m->count,
+                      &m->offset,
+                      &m->carry_offset,
+                      &m->status,
+                      &m->x_ref,
+                      &m->travel,
+                      &m->pairs.keys,
+                      &m->pairs.spring,
+                      &m->pairs.kt,
+                      &m->carry.keys,
+                      &m->carry.spring,
+                      &m->carry.kt,
+                      &m->force,
+                      &m->point,
+                      &m->info,
+                      &m->second_list,
+                      &m->second_count,
+                      &m->second_off,
+                      &m->iscr,
+                      &m->rscr};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++)
         release(bufs[i]);
     for (int i = 0; i < NKERNELS; i++)

@@ -36,38 +36,63 @@ static cl_int arg_real(sim *m, cl_kernel k, int i, double v)
                   : clSetKernelArg(k, (cl_uint)i, sizeof f, &f);
 }
 
+/* Enqueues zeros into the first cnt reals of b (all zero bytes: a zero of either precision). */
+static cl_int zero_reals(sim *m, cl_mem b, size_t cnt)
+{
+    double z = 0;
+    return clEnqueueFillBuffer(m->dev->queue, b, &z, m->rs, 0, cnt * m->rs, 0, NULL, NULL);
+}
+
 static int arg_fail(pd_error *err, const char *kernel)
 {
     return pd_error_set(err, PD_ECL, "opencl: setting the arguments of %s failed", kernel);
 }
 
-/* Grows the pair arrays to hold npairs (the last step's history stays where it is). */
+/*
+ * Capacity for `need` pairs. Arrays grow only when a list is rebuilt, and their old contents are
+ * not copied (the state was carried out first), so growing costs an allocation: 1/8 headroom
+ * means a packing whose pairs triple reallocates about ten times.
+ */
+static size_t pair_capacity(size_t need)
+{
+    return need + need / 8 + 1024;
+}
+
+/* (Re)allocates a set of pair arrays for `need` pairs, discarding its contents. */
+static int grow_pairs(sim *m, sim_pairs *p, size_t need, const char *what, pd_error *err)
+{
+    if (need <= p->cap && p->keys) return PD_OK;
+    size_t cap = pair_capacity(need);
+    cl_int e = CL_SUCCESS;
+    cl_context ctx = m->dev->ctx;
+    m->bytes += (double)(cap - p->cap) * (sizeof(cl_ulong) + 4 * m->rs);
+    if (p->keys) clReleaseMemObject(p->keys);
+    if (p->spring) clReleaseMemObject(p->spring);
+    if (p->kt) clReleaseMemObject(p->kt);
+    p->keys = p->spring = p->kt = NULL;
+    p->cap = 0;
+    p->keys = clCreateBuffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_ulong) * cap, NULL, &e);
+    if (e == CL_SUCCESS)
+        p->spring = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * 3 * cap, NULL, &e);
+    if (e == CL_SUCCESS) p->kt = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * cap, NULL, &e);
+    if (e != CL_SUCCESS) return CL_FAIL(err, what, e);
+    p->cap = cap;
+    return PD_OK;
+}
+
+/* Grows the pair arrays to hold npairs (their state has been carried out by keep_history). */
 static int ensure_pairs(sim *m, int npairs, pd_error *err)
 {
     size_t need = (size_t)npairs;
     cl_int e = CL_SUCCESS;
     cl_context ctx = m->dev->ctx;
-    if (need > m->cur.cap || !m->cur.keys) {
-        size_t cap = need + need / 4 + 1024; /* a pair list changes only when rebuilt */
-        m->bytes += (double)(cap - m->cur.cap) * (sizeof(cl_ulong) + 4 * m->rs);
-        if (m->cur.keys) clReleaseMemObject(m->cur.keys);
-        if (m->cur.spring) clReleaseMemObject(m->cur.spring);
-        if (m->cur.kt) clReleaseMemObject(m->cur.kt);
-        m->cur.keys = m->cur.spring = m->cur.kt = NULL;
-        m->cur.cap = 0;
-        m->cur.keys = clCreateBuffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_ulong) * cap, NULL, &e);
-        if (e == CL_SUCCESS)
-            m->cur.spring = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * 3 * cap, NULL, &e);
-        if (e == CL_SUCCESS)
-            m->cur.kt = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * cap, NULL, &e);
-        if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateBuffer(contact pairs)", e);
-        m->cur.cap = cap;
-    }
+    int rc = grow_pairs(m, &m->pairs, need, "clCreateBuffer(contact pairs)", err);
+    if (rc != PD_OK) return rc;
     if (need > m->work_cap || !m->force) {
-        size_t cap = need + need / 4 + 1024; /* a pair list changes only when rebuilt */
-        cl_mem *b[] = {&m->force, &m->point, &m->info, &m->ids, &m->second_list};
-        size_t sz[] = {m->rs * 3, m->rs * 3, m->rs * 2, sizeof(int), sizeof(int)};
-        m->bytes += (double)(cap - m->work_cap) * (8 * m->rs + 2 * sizeof(int));
+        size_t cap = pair_capacity(need);
+        cl_mem *b[] = {&m->force, &m->point, &m->info, &m->second_list};
+        size_t sz[] = {m->rs * 3, m->rs * 3, m->rs, sizeof(int)};
+        m->bytes += (double)(cap - m->work_cap) * (7 * m->rs + sizeof(int));
         m->work_cap = 0;
         for (size_t i = 0; i < sizeof b / sizeof b[0]; i++) {
             if (*b[i]) clReleaseMemObject(*b[i]);
@@ -97,34 +122,71 @@ static int check_status(sim *m, pd_error *err)
 
 /*
  * The last step's pair list again, when no particle has moved half the skin since it was built
- * (status[0], set by the drift): the same keys in the same order, so each pair's history is
- * where the contact stage looks. Returns 1 when reused, 0 when the list must be built, or an
- * error.
+ * (status[0], set by the drift): the same keys in the same order, each pair's state where the
+ * last step left it. Returns 1 when reused, 0 when the list must be built, or an error.
  */
 static int reuse_pairs(sim *m, pd_error *err)
 {
     pd_device *dev = m->dev;
-    if (!m->list_valid || m->walls_move || !m->old.keys) return 0;
+    if (!m->list_valid || m->walls_move) return 0;
     cl_int e = clEnqueueReadBuffer(dev->queue, m->status, CL_TRUE, 0, sizeof m->status_host,
                                    m->status_host, 0, NULL, NULL);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(status)", e);
     int rc = check_status(m, err);
     if (rc != PD_OK) return rc;
-    if (m->status_host[0]) return 0;
-    int np = m->n_old;
-    if ((rc = ensure_pairs(m, np, err)) != PD_OK) return rc;
-    if (np > 0)
-        e = clEnqueueCopyBuffer(dev->queue, m->old.keys, m->cur.keys, 0, 0,
-                                sizeof(cl_ulong) * (size_t)np, 0, NULL, NULL);
-    if (e == CL_SUCCESS)
-        e = clEnqueueCopyBuffer(dev->queue, m->old_offset, m->offset, 0, 0,
-                                sizeof(int) * ((size_t)m->n + 1), 0, NULL, NULL);
-    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueCopyBuffer(pair list)", e);
-    m->npairs = np;
-    return 1;
+    return m->status_host[0] ? 0 : 1;
 }
 
-/* After a build: its positions are the reference the skin is measured from. */
+/*
+ * Before the list is rebuilt: the old list's pairs that carry state (ch_has_state), copied in
+ * key order into m->carry with per-particle offsets (carry_offset), where the new list's pairs
+ * find theirs. Uses m->count, which the traversal overwrites next.
+ */
+static int keep_history(sim *m, pd_error *err)
+{
+    pd_device *dev = m->dev;
+    int n = m->n, rc;
+    cl_int e = CL_SUCCESS;
+    m->ncarry = 0;
+    if (m->npairs == 0) { /* nothing to carry: every particle's segment is empty */
+        int zero = 0;
+        e = clEnqueueFillBuffer(dev->queue, m->carry_offset, &zero, sizeof zero, 0,
+                                sizeof(int) * ((size_t)n + 1), 0, NULL, NULL);
+        if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueFillBuffer(carry offsets)", e);
+        return grow_pairs(m, &m->carry, 0, "clCreateBuffer(carried pairs)", err);
+    }
+    cl_kernel k = m->k_hist_count;
+    e |= ARG(k, 0, m->offset);
+    e |= ARG(k, 1, m->pairs.spring);
+    e |= ARG(k, 2, m->pairs.kt);
+    e |= ARG(k, 3, n);
+    e |= ARG(k, 4, m->count);
+    if (e != CL_SUCCESS) return arg_fail(err, "history_count");
+    if ((rc = cl_launch(dev, k, (size_t)n, "history_count", err)) != PD_OK) return rc;
+    if ((rc = dsort_scan(&m->sort, m->count, n, m->carry_offset, err)) != PD_OK) return rc;
+    cl_int total = 0;
+    e = clEnqueueReadBuffer(dev->queue, m->carry_offset, CL_TRUE, sizeof(int) * (size_t)n,
+                            sizeof total, &total, 0, NULL, NULL);
+    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(carried pair count)", e);
+    rc = grow_pairs(m, &m->carry, (size_t)total, "clCreateBuffer(carried pairs)", err);
+    if (rc != PD_OK) return rc;
+    k = m->k_hist_keep;
+    e |= ARG(k, 0, m->offset);
+    e |= ARG(k, 1, m->pairs.keys);
+    e |= ARG(k, 2, m->pairs.spring);
+    e |= ARG(k, 3, m->pairs.kt);
+    e |= ARG(k, 4, n);
+    e |= ARG(k, 5, m->carry_offset);
+    e |= ARG(k, 6, m->carry.keys);
+    e |= ARG(k, 7, m->carry.spring);
+    e |= ARG(k, 8, m->carry.kt);
+    if (e != CL_SUCCESS) return arg_fail(err, "history_keep");
+    if ((rc = cl_launch(dev, k, (size_t)n, "history_keep", err)) != PD_OK) return rc;
+    m->ncarry = total;
+    return PD_OK;
+}
+
+/* After a build: its positions are the reference the skin and the travel are measured from. */
 static int list_built(sim *m, pd_error *err)
 {
     int zero = 0;
@@ -133,21 +195,24 @@ static int list_built(sim *m, pd_error *err)
     if (e == CL_SUCCESS)
         e = clEnqueueFillBuffer(m->dev->queue, m->status, &zero, sizeof zero, 0, sizeof zero, 0,
                                 NULL, NULL);
+    if (e == CL_SUCCESS) e = zero_reals(m, m->travel, (size_t)m->n);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueCopyBuffer(reference positions)", e);
     m->list_valid = 1;
     m->builds++;
     return PD_OK;
 }
 
-/* Broad phase: boxes, tree, traversal; leaves the step's sorted pair keys in m->cur.keys. */
+/* Broad phase: boxes, tree, traversal; leaves the step's sorted pair keys in m->pairs.keys. */
 static int broad_phase(sim *m, double *t0, pd_error *err)
 {
     pd_device *dev = m->dev;
     int n = m->n, nw = m->nwall, rc = reuse_pairs(m, err);
+    m->list_fresh = rc == 0;
     if (rc != 0) { /* reused (1) or an error */
         stage_end(m, SIM_TRAVERSE, t0);
         return rc == 1 ? PD_OK : rc;
     }
+    if ((rc = keep_history(m, err)) != PD_OK) return rc;
     cl_int e = CL_SUCCESS;
     /* the top 32 bits of the 63-bit Morton codes (10-11 bits per axis, 1/2048 of the scene
      * box): four radix passes instead of eight; equal codes are ordered by index (Karras) */
@@ -246,8 +311,8 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     e |= ARG(m->k_write, 7, nw);
     e |= ARG(m->k_write, 8, m->offset);
     e |= ARG(m->k_write, 9, m->cand);
-    e |= ARG(m->k_write, 10, m->ids);
-    e |= ARG(m->k_write, 11, m->cur.keys);
+    e |= ARG(m->k_write, 10, m->second_list); /* scratch until the gather lists into it */
+    e |= ARG(m->k_write, 11, m->pairs.keys);
     e |= ARG(m->k_write, 12, brute);
     if (e != CL_SUCCESS) return arg_fail(err, "broad_write");
     rc = cl_launch(dev, m->k_write, (size_t)n, "broad_write", err);
@@ -262,15 +327,13 @@ static int contacts(sim *m, pd_error *err)
     cl_kernel k = m->k_contact;
     int a = 0, nwork = m->npairs < m->nwork ? m->npairs : m->nwork;
     cl_int e = CL_SUCCESS;
-    e |= ARG(k, a++, m->cur.keys);
+    e |= ARG(k, a++, m->pairs.keys);
     e |= ARG(k, a++, m->npairs);
-    cl_mem ok = m->old.keys ? m->old.keys : m->cur.keys; /* first step: no history */
-    cl_mem os = m->old.spring ? m->old.spring : m->cur.spring;
-    cl_mem okt = m->old.kt ? m->old.kt : m->cur.kt;
-    e |= ARG(k, a++, ok);
-    e |= ARG(k, a++, m->old_offset);
-    e |= ARG(k, a++, os);
-    e |= ARG(k, a++, okt);
+    e |= ARG(k, a++, m->list_fresh);
+    e |= ARG(k, a++, m->carry.keys);
+    e |= ARG(k, a++, m->carry_offset);
+    e |= ARG(k, a++, m->carry.spring);
+    e |= ARG(k, a++, m->carry.kt);
     cl_mem body[] = {m->x,      m->q,        m->v,        m->w,    m->size,         m->inv_m,
                      m->shape,  m->material, m->vert,     m->tri,  m->voff,         m->toff,
                      m->vt_off, m->vt,       m->unit_vol, m->kind, m->radius_ratio, m->params};
@@ -291,26 +354,29 @@ static int contacts(sim *m, pd_error *err)
     e |= ARG(k, a++, m->rlen);
     e |= ARG(k, a++, m->pts_cap);
     e |= ARG(k, a++, nwork);
-    cl_mem outs[] = {m->force, m->point, m->cur.spring, m->cur.kt, m->info};
+    e |= ARG(k, a++, m->travel);
+    /* certified gaps up to the skin: a list lasts until a particle has moved half of it */
+    e |= arg_real(m, k, a++, m->skin);
+    cl_mem outs[] = {m->force, m->point, m->pairs.spring, m->pairs.kt, m->info};
     for (size_t i = 0; i < sizeof outs / sizeof outs[0]; i++)
         e |= ARG(k, a++, outs[i]);
     if (e != CL_SUCCESS) return arg_fail(err, "contact_forces");
     return cl_launch(m->dev, k, (size_t)nwork, "contact_forces", err);
 }
 
-/* Per-particle sums: contacts as second body counted and listed, then the gather kernel. */
-static int gather(sim *m, pd_error *err)
+/* Each particle's contacts as second body, counted and listed (after a list is built). */
+static int second_lists(sim *m, pd_error *err)
 {
     int rc, np = m->npairs, n = m->n;
     int zero = 0;
     cl_int e = clEnqueueFillBuffer(m->dev->queue, m->second_count, &zero, sizeof zero, 0,
                                    sizeof(int) * (size_t)n, 0, NULL, NULL);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueFillBuffer", e);
-    e |= ARG(m->k_second_count, 0, m->cur.keys);
+    e |= ARG(m->k_second_count, 0, m->pairs.keys);
     e |= ARG(m->k_second_count, 1, np);
     e |= ARG(m->k_second_count, 2, n);
     e |= ARG(m->k_second_count, 3, m->second_count);
-    e |= ARG(m->k_second_fill, 0, m->cur.keys);
+    e |= ARG(m->k_second_fill, 0, m->pairs.keys);
     e |= ARG(m->k_second_fill, 1, np);
     e |= ARG(m->k_second_fill, 2, n);
     e |= ARG(m->k_second_fill, 3, m->second_off);
@@ -324,10 +390,17 @@ static int gather(sim *m, pd_error *err)
     e = clEnqueueFillBuffer(m->dev->queue, m->second_count, &zero, sizeof zero, 0,
                             sizeof(int) * (size_t)n, 0, NULL, NULL);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueFillBuffer", e);
-    if ((rc = cl_launch(m->dev, m->k_second_fill, (size_t)np, "second_fill", err)) != PD_OK)
-        return rc;
+    return cl_launch(m->dev, m->k_second_fill, (size_t)np, "second_fill", err);
+}
+
+/* Per-particle sums: the gather kernel, over second-body lists kept while the list is. */
+static int gather(sim *m, pd_error *err)
+{
+    int rc;
+    if (m->list_fresh && (rc = second_lists(m, err)) != PD_OK) return rc;
     const pd_scenario *s = m->s;
     cl_kernel k = m->k_body;
+    cl_int e = CL_SUCCESS;
     int a = 0;
     e |= ARG(k, a++, m->offset);
     e |= ARG(k, a++, m->second_off);
@@ -358,16 +431,7 @@ int sim_forces(sim *m, pd_error *err)
     stage_end(m, SIM_CONTACTS, &t0);
     if (rc == PD_OK) rc = gather(m, err);
     stage_end(m, SIM_GATHER, &t0);
-    if (rc != PD_OK) return rc;
-    /* this step's pairs become the next step's history */
-    sim_pairs t = m->old;
-    m->old = m->cur;
-    m->cur = t;
-    m->n_old = m->npairs;
-    cl_mem o = m->old_offset;
-    m->old_offset = m->offset;
-    m->offset = o;
-    return PD_OK;
+    return rc;
 }
 
 static int kick(sim *m, pd_error *err)
@@ -403,6 +467,10 @@ int sim_step(sim *m, int *bad_particle, pd_error *err)
     e |= ARG(k, 8, m->status);
     e |= ARG(k, 9, m->x_ref);
     e |= arg_real(m, k, 10, 0.25 * m->skin * m->skin);
+    e |= ARG(k, 11, m->size);
+    e |= ARG(k, 12, m->shape);
+    e |= ARG(k, 13, m->radius_ratio);
+    e |= ARG(k, 14, m->travel);
     if (e != CL_SUCCESS) return arg_fail(err, "integrate_drift");
     if ((rc = cl_launch(m->dev, k, (size_t)m->n, "integrate_drift", err)) != PD_OK) return rc;
     if (m->walls_move && (rc = sim_walls_at(m, (double)(m->step + 1) * m->dt, err)) != PD_OK)

@@ -96,7 +96,8 @@ __kernel void broad_count(__global const pd_real *box, __global const int *left,
 /*
  * Writes particle i's pair keys at offset[i]: partners in ascending order (an insertion sort of
  * the segment: a particle has tens of candidates), then walls. The partner ids are first stored
- * in the low words of the segment's keys as scratch.
+ * in scratch at the same offsets (an int per pair: the gather's second-body lists, which are
+ * filled after this).
  */
 __kernel void broad_write(__global const pd_real *box, __global const int *left,
                           __global const int *right, __global const int *idx, int n,

@@ -3,33 +3,42 @@
  * step's candidate pairs, sorted by key. Built with -DPD_DOUBLE=0 or 1.
  *
  * nwork work-items stride over the pairs, each with its own overlap scratch (ilen ints, rlen
- * reals), so scratch memory follows the device's parallelism, not the number of pairs. Each pair
- * finds its tangential history by binary search in last step's sorted keys (contact_history.h).
- * The search is confined to the pair's first body's segment of last step's keys (old_offset).
+ * reals), so scratch memory follows the device's parallelism, not the number of pairs. While a
+ * pair list is reused, each pair's tangential state is read and written in place (spring, kt).
+ * On the step a list is built (fresh), each pair finds its state by binary search among the
+ * pairs the old list carried (history_keep below; contact_history.h), within its first body's
+ * segment (carry_offset).
+ *
+ * Temporal coherence: two polyhedra found apart get a certified gap (np_hull_gap), stored as
+ * -(gap + their travel then) in kt, which no contact has negative. While the list is reused, the
+ * pair is skipped (info -2) until the particles' travel (integrate.cl: a bound on how far any of
+ * their points has moved since the list was built) reaches it: they cannot have met. In a
+ * resting bed most candidates are such pairs, and their overlaps were half of the step.
  * A particle meets a wall's triangles found in the wall's BVH (wall_bvh.h, np_wall_local); a
  * wall-pair work-item's scratch begins with np_wall_ilen/_rlen(wall_cap) for them.
  * Per pair out: force on the second body (3), the contact point (3), the new
- * tangential spring (3) and stiffness (1), and info (2): touching flag and depth / size.
+ * tangential spring (3) and stiffness (1) (or certificate), and info (1): depth / smaller size
+ * when the bodies touch, -1 when they do not, -2 when skipped as certified apart.
  */
 #include "pd_real.h"
 #include "contact_pair.h"
 
-__kernel void
-contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *old_keys,
-               __global const int *old_offset, __global const pd_real *old_spring,
-               __global const pd_real *old_kt, __global const pd_real *x, __global const pd_real *q,
-               __global const pd_real *v, __global const pd_real *w, __global const pd_real *size,
-               __global const pd_real *inv_m, __global const int *shape,
-               __global const int *material, __global const pd_real *vert, __global const int *tri,
-               __global const int *voff, __global const int *toff, __global const int *vt_off,
-               __global const int *vt, __global const pd_real *unit_vol, __global const int *kind,
-               __global const pd_real *radius_ratio, __global const pd_real *params, int nmat,
-               int nparticles, pd_real dt, __global const pd_real *wnode_box,
-               __global const int *wnode_kid, __global const int *wnode_off,
-               __global const int *wtri_order, int wall_cap, int nwall, __global int *status,
-               __global int *iscr, __global pd_real *rscr, int ilen, int rlen, int pts_cap,
-               int nwork, __global pd_real *force, __global pd_real *point,
-               __global pd_real *spring, __global pd_real *kt, __global pd_real *info)
+__kernel void contact_forces(
+    __global const ch_key *keys, int npairs, int fresh, __global const ch_key *carry_keys,
+    __global const int *carry_offset, __global const pd_real *carry_spring,
+    __global const pd_real *carry_kt, __global const pd_real *x, __global const pd_real *q,
+    __global const pd_real *v, __global const pd_real *w, __global const pd_real *size,
+    __global const pd_real *inv_m, __global const int *shape, __global const int *material,
+    __global const pd_real *vert, __global const int *tri, __global const int *voff,
+    __global const int *toff, __global const int *vt_off, __global const int *vt,
+    __global const pd_real *unit_vol, __global const int *kind,
+    __global const pd_real *radius_ratio, __global const pd_real *params, int nmat, int nparticles,
+    pd_real dt, __global const pd_real *wnode_box, __global const int *wnode_kid,
+    __global const int *wnode_off, __global const int *wtri_order, int wall_cap, int nwall,
+    __global int *status, __global int *iscr, __global pd_real *rscr, int ilen, int rlen,
+    int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap,
+    __global pd_real *force, __global pd_real *point, __global pd_real *spring,
+    __global pd_real *kt, __global pd_real *info)
 {
     int g = (int)get_global_id(0);
     if (g >= nwork) return;
@@ -55,6 +64,7 @@ contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *o
     wd.nmat = nmat;
     wd.nparticles = nparticles;
     wd.dt = dt;
+    wd.gap_cap = gap_cap;
     wd.wnode_box = wnode_box;
     wd.wnode_kid = wnode_kid;
     wd.wnode_off = wnode_off;
@@ -67,22 +77,64 @@ contact_forces(__global const ch_key *keys, int npairs, __global const ch_key *o
     for (int c = g; c < npairs; c += nwork) {
         ch_key k = keys[c];
         cp_result r;
+        /* particles' travel since the list was built (walls do not move while a list is kept) */
+        unsigned ib = ch_second(k);
+        pd_real moved = travel[ch_first(k)] + (ib < (unsigned)nparticles ? travel[ib] : PD_R(0));
         if (cp_apart(&wd, k)) {
             cp_none(&r); /* no force, and no history to look up */
-        } else {
-            /* last step's pairs of the same first body: a few entries to search, not all */
-            int lo = old_offset[ch_first(k)],
-                j = ch_find(old_keys + lo, old_offset[ch_first(k) + 1] - lo, k);
+        } else if (!fresh && kt[c] < PD_R(0) && moved < -kt[c]) {
+            /* certified apart: kt holds -(gap + travel then); they have not moved that far */
+            force[3 * c] = force[3 * c + 1] = force[3 * c + 2] = PD_R(0);
+            point[3 * c] = point[3 * c + 1] = point[3 * c + 2] = PD_R(0);
+            info[c] = PD_R(-2);
+            continue;
+        } else if (fresh) {
+            /* the carried pairs of the same first body: a few entries to search, not all */
+            int lo = carry_offset[ch_first(k)],
+                j = ch_find(carry_keys + lo, carry_offset[ch_first(k) + 1] - lo, k);
             j = j >= 0 ? lo + j : -1;
-            pd_v3 s0 = j >= 0 ? v3_load(old_spring, j) : v3(0, 0, 0);
-            pd_real kt0 = j >= 0 ? old_kt[j] : PD_R(0);
+            pd_v3 s0 = j >= 0 ? v3_load(carry_spring, j) : v3(0, 0, 0);
+            pd_real kt0 = j >= 0 ? carry_kt[j] : PD_R(0);
             cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, &r);
+        } else {
+            cp_pair(&wd, k, v3_load(spring, c), pd_max(kt[c], PD_R(0)), is, rs, pts_cap, &r);
         }
         v3_store(force, c, r.force);
         v3_store(point, c, r.point);
         v3_store(spring, c, r.spring);
-        kt[c] = r.kt;
-        info[2 * c] = (pd_real)r.touching;
-        info[2 * c + 1] = r.ratio;
+        /* a separated pair keeps its certificate where a touching one keeps its stiffness:
+         * -(gap + travel so far), rounded down, valid while the list is (never carried) */
+        kt[c] = r.gap > PD_R(0) ? -(r.gap + moved) * (PD_R(1) - PD_R(4) * PD_EPS) : r.kt;
+        info[c] = r.touching ? r.ratio : PD_R(-1);
+    }
+}
+
+/* Before a new pair list is built: how many of particle p's pairs in the old list carry state. */
+__kernel void history_count(__global const int *offset, __global const pd_real *spring,
+                            __global const pd_real *kt, int n, __global int *count)
+{
+    int p = (int)get_global_id(0);
+    if (p >= n) return;
+    int m = 0;
+    for (int c = offset[p]; c < offset[p + 1]; c++)
+        m += ch_has_state(spring, kt, c);
+    count[p] = m;
+}
+
+/* ... and copies them, in key order, to particle p's segment of the carried pairs. */
+__kernel void history_keep(__global const int *offset, __global const ch_key *keys,
+                           __global const pd_real *spring, __global const pd_real *kt, int n,
+                           __global const int *carry_offset, __global ch_key *carry_keys,
+                           __global pd_real *carry_spring, __global pd_real *carry_kt)
+{
+    int p = (int)get_global_id(0);
+    if (p >= n) return;
+    int j = carry_offset[p];
+    for (int c = offset[p]; c < offset[p + 1]; c++) {
+        if (!ch_has_state(spring, kt, c)) continue;
+        carry_keys[j] = keys[c];
+        v3_store(carry_spring, j, v3_load(spring, c));
+        carry_kt[j] = kt[c];
+        j++;
     }
 }

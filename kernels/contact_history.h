@@ -8,6 +8,11 @@
  * from CH_WALL up. A new contact finds its predecessor by binary search in the previous step's
  * sorted keys: no hashing, no atomics, the same answer on every device.
  *
+ * A pair list is kept for many steps (the Verlet skin), and each pair's state is updated in place
+ * while it is. When a new list is built, the pairs that carry state (ch_has_state; in a bed a
+ * fifth of the candidates) are first copied out, sorted by key with per-particle offsets, and
+ * the new list's pairs look themselves up there: memory for one list, not two.
+ *
  * Forces are summed per particle in a fixed order (its contacts as first body in key order, then
  * those as second body in key order), never with floating-point atomics, so a run is
  * bit-identical from run to run on one device (issue 3, stage 6).
@@ -58,6 +63,17 @@ PD_FN int ch_find(PD_GLOBAL const ch_key *keys, int n, ch_key k)
 {
     int i = ch_lower_bound(keys, n, k);
     return i < n && keys[i] == k ? i : -1;
+}
+
+/*
+ * Whether pair c's state is worth carrying to the next pair list: a pair with no tangential
+ * spring and no stiffness starts as a new contact would (zero state), so it is not kept; nor is
+ * a separated pair's certificate (a negative kt, contact.cl), which holds only while its list does.
+ */
+PD_FN int ch_has_state(PD_GLOBAL const pd_real *spring, PD_GLOBAL const pd_real *kt, int c)
+{
+    return kt[c] > PD_R(0) || spring[3 * c] != PD_R(0) || spring[3 * c + 1] != PD_R(0) ||
+           spring[3 * c + 2] != PD_R(0);
 }
 
 /*

@@ -55,6 +55,8 @@ typedef struct cp_world {
     int nmat;
     int nparticles; /* bodies at and above are walls: body = nparticles + (key - CH_WALL) */
     pd_real dt;
+    /* separated polyhedra: the gap cp_mesh_gap certifies at most, m (0: only np_hull_gap's) */
+    pd_real gap_cap;
     /* the walls' triangle BVHs (wall_bvh.h): wall w's nodes from wnode_off[w]; the leaves'
      * triangle order of a wall of shape s at wtri_order[toff[s] ..]; wall_cap: most triangles of
      * one wall near one particle (np_wall_local's cap) */
@@ -80,7 +82,12 @@ typedef struct cp_result {
     int touching;  /* bodies overlap (a contact) */
     pd_real ratio; /* depth / smaller particle size */
     pd_v3 point;   /* contact point, m */
+    pd_real gap;   /* two polyhedral particles apart: a certified lower bound on their distance
+                      (np_hull_gap), m; 0 otherwise */
 } cp_result;
+
+/* Gilbert iterations np_hull_gap may take for a separated pair's gap. */
+#define CP_GAP_ITERS 8
 
 /* The body index of the second half of a key (walls follow the particles). */
 PD_FN int cp_body(const cp_world *wd, unsigned id)
@@ -129,6 +136,155 @@ PD_FN pd_v3 cp_closest_on_triangle(pd_v3 p, pd_v3 a, pd_v3 b, pd_v3 c)
         return v3_add(b, v3_scale(v3_sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
     pd_real den = PD_R(1) / (va + vb + vc);
     return v3_add(a, v3_add(v3_scale(ab, vb * den), v3_scale(ac, vc * den)));
+}
+
+/* Squared distance between segments p0-p1 and q0-q1 (Ericson 5.1.9). */
+PD_FN pd_real cp_segment_dist2(pd_v3 p0, pd_v3 p1, pd_v3 q0, pd_v3 q1)
+{
+    pd_v3 d1 = v3_sub(p1, p0), d2 = v3_sub(q1, q0), r = v3_sub(p0, q0);
+    pd_real a = v3_dot(d1, d1), e = v3_dot(d2, d2), f = v3_dot(d2, r);
+    pd_real s = 0, t = 0;
+    if (a <= PD_R(0) && e <= PD_R(0)) {
+        s = t = 0;
+    } else if (a <= PD_R(0)) {
+        t = pd_min(pd_max(f / e, PD_R(0)), PD_R(1));
+    } else {
+        pd_real c = v3_dot(d1, r);
+        if (e <= PD_R(0)) {
+            s = pd_min(pd_max(-c / a, PD_R(0)), PD_R(1));
+        } else {
+            pd_real b = v3_dot(d1, d2), den = a * e - b * b;
+            s = den > PD_R(0) ? pd_min(pd_max((b * f - c * e) / den, PD_R(0)), PD_R(1)) : PD_R(0);
+            t = (b * s + f) / e;
+            if (t < PD_R(0)) {
+                t = 0;
+                s = pd_min(pd_max(-c / a, PD_R(0)), PD_R(1));
+            } else if (t > PD_R(1)) {
+                t = 1;
+                s = pd_min(pd_max((b - c) / a, PD_R(0)), PD_R(1));
+            }
+        }
+    }
+    pd_v3 dd = v3_sub(v3_add(p0, v3_scale(d1, s)), v3_add(q0, v3_scale(d2, t)));
+    return v3_dot(dd, dd);
+}
+
+/*
+ * Squared distance between triangles t[0..2] and u[0..2]: the least of the edge pairs', the
+ * corners' to the other triangle, and, where an edge crosses the other's plane, the crossing's
+ * to the other triangle (0 when the triangles cut each other).
+ */
+PD_FN pd_real cp_triangle_dist2(const pd_v3 *t, const pd_v3 *u)
+{
+    pd_real best = PD_REAL_MAX;
+    for (int i = 0; i < 3; i++)
+        for (int j = 0; j < 3; j++)
+            best = pd_min(best, cp_segment_dist2(t[i], t[(i + 1) % 3], u[j], u[(j + 1) % 3]));
+    for (int side = 0; side < 2; side++) {
+        const pd_v3 *a = side ? u : t, *b = side ? t : u;
+        pd_v3 nb = v3_cross(v3_sub(b[1], b[0]), v3_sub(b[2], b[0]));
+        pd_real h[3];
+        for (int i = 0; i < 3; i++) {
+            pd_v3 cp = v3_sub(cp_closest_on_triangle(a[i], b[0], b[1], b[2]), a[i]);
+            best = pd_min(best, v3_dot(cp, cp));
+            h[i] = v3_dot(nb, v3_sub(a[i], b[0]));
+        }
+        for (int i = 0; i < 3; i++) {
+            int k = (i + 1) % 3;
+            if ((h[i] < PD_R(0)) == (h[k] < PD_R(0)) || h[i] == h[k]) continue;
+            pd_v3 x = v3_add(a[i], v3_scale(v3_sub(a[k], a[i]), h[i] / (h[i] - h[k])));
+            pd_v3 cp = v3_sub(cp_closest_on_triangle(x, b[0], b[1], b[2]), x);
+            best = pd_min(best, v3_dot(cp, cp));
+        }
+    }
+    return best;
+}
+
+/*
+ * A lower bound on the distance between the surfaces of A and B of `in` (np_setup, A's frame),
+ * capped at `cap` (m), for a pair whose overlap came out empty: the least distance between a
+ * triangle of A and one of B whose boxes come within cap (any other pair is at least cap apart).
+ * Works for non-convex shapes that nest in each other's pockets, where np_hull_gap finds
+ * nothing. The distances are those of points found on the triangles, so rounding can only place
+ * them slightly past the true closest points: 1 % and a few ulps of the scale are taken off.
+ * scr: 3 nvb reals (B's vertices in A's frame); iscr: ntb ints.
+ */
+PD_FN pd_real cp_mesh_gap(const ovl_in *in, pd_real cap, PD_GLOBAL pd_real *scr,
+                          PD_GLOBAL int *iscr)
+{
+    const pd_real *r = in->rot;
+    pd_v3 tr = v3(in->tr[0], in->tr[1], in->tr[2]);
+    pd_v3 blo = v3(PD_REAL_MAX, PD_REAL_MAX, PD_REAL_MAX), bhi = v3_scale(blo, PD_R(-1));
+    for (int j = 0; j < in->nvb; j++) {
+        pd_v3 v = v3_load(in->vb, j);
+        pd_v3 y =
+            v3_add(v3(r[0] * v.x + r[1] * v.y + r[2] * v.z, r[3] * v.x + r[4] * v.y + r[5] * v.z,
+                      r[6] * v.x + r[7] * v.y + r[8] * v.z),
+                   tr);
+        v3_store(scr, j, y);
+        blo = v3(pd_min(blo.x, y.x), pd_min(blo.y, y.y), pd_min(blo.z, y.z));
+        bhi = v3(pd_max(bhi.x, y.x), pd_max(bhi.y, y.y), pd_max(bhi.z, y.z));
+    }
+    pd_v3 capv = v3(cap, cap, cap);
+    /* A's extent within cap of B's box, and B's triangles within cap of it */
+    pd_v3 alo = v3(PD_REAL_MAX, PD_REAL_MAX, PD_REAL_MAX), ahi = v3_scale(alo, PD_R(-1));
+    for (int i = 0; i < in->nva; i++) {
+        pd_v3 x = v3_scale(v3_load(in->va, i), in->sa);
+        alo = v3(pd_min(alo.x, x.x), pd_min(alo.y, x.y), pd_min(alo.z, x.z));
+        ahi = v3(pd_max(ahi.x, x.x), pd_max(ahi.y, x.y), pd_max(ahi.z, x.z));
+    }
+    pd_real scale = pd_max(pd_max(v3_amax(alo), v3_amax(ahi)), pd_max(v3_amax(blo), v3_amax(bhi)));
+    pd_v3 qlo = v3_sub(v3(pd_max(alo.x, blo.x), pd_max(alo.y, blo.y), pd_max(alo.z, blo.z)), capv);
+    pd_v3 qhi = v3_add(v3(pd_min(ahi.x, bhi.x), pd_min(ahi.y, bhi.y), pd_min(ahi.z, bhi.z)), capv);
+    int nb = 0;
+    for (int u = 0; u < in->ntb; u++) {
+        pd_v3 p[3];
+        for (int q = 0; q < 3; q++)
+            p[q] = v3_load(scr, in->tb[3 * u + q]);
+        pd_v3 lo =
+            v3(pd_min(pd_min(p[0].x, p[1].x), p[2].x), pd_min(pd_min(p[0].y, p[1].y), p[2].y),
+               pd_min(pd_min(p[0].z, p[1].z), p[2].z));
+        pd_v3 hi =
+            v3(pd_max(pd_max(p[0].x, p[1].x), p[2].x), pd_max(pd_max(p[0].y, p[1].y), p[2].y),
+               pd_max(pd_max(p[0].z, p[1].z), p[2].z));
+        if (hi.x < qlo.x || lo.x > qhi.x || hi.y < qlo.y || lo.y > qhi.y || hi.z < qlo.z ||
+            lo.z > qhi.z)
+            continue;
+        iscr[nb++] = u;
+    }
+    pd_real best = cap * cap;
+    for (int t = 0; t < in->nta && nb > 0; t++) {
+        pd_v3 a[3];
+        for (int q = 0; q < 3; q++)
+            a[q] = v3_scale(v3_load(in->va, in->ta[3 * t + q]), in->sa);
+        pd_v3 lo = v3_sub(v3(pd_min(pd_min(a[0].x, a[1].x), a[2].x),
+                             pd_min(pd_min(a[0].y, a[1].y), a[2].y),
+                             pd_min(pd_min(a[0].z, a[1].z), a[2].z)),
+                          capv);
+        pd_v3 hi = v3_add(v3(pd_max(pd_max(a[0].x, a[1].x), a[2].x),
+                             pd_max(pd_max(a[0].y, a[1].y), a[2].y),
+                             pd_max(pd_max(a[0].z, a[1].z), a[2].z)),
+                          capv);
+        if (hi.x < qlo.x || lo.x > qhi.x || hi.y < qlo.y || lo.y > qhi.y || hi.z < qlo.z ||
+            lo.z > qhi.z)
+            continue;
+        for (int l = 0; l < nb; l++) {
+            pd_v3 b[3];
+            for (int q = 0; q < 3; q++)
+                b[q] = v3_load(scr, in->tb[3 * iscr[l] + q]);
+            if (pd_max(pd_max(b[0].x, b[1].x), b[2].x) < lo.x ||
+                pd_min(pd_min(b[0].x, b[1].x), b[2].x) > hi.x ||
+                pd_max(pd_max(b[0].y, b[1].y), b[2].y) < lo.y ||
+                pd_min(pd_min(b[0].y, b[1].y), b[2].y) > hi.y ||
+                pd_max(pd_max(b[0].z, b[1].z), b[2].z) < lo.z ||
+                pd_min(pd_min(b[0].z, b[1].z), b[2].z) > hi.z)
+                continue;
+            best = pd_min(best, cp_triangle_dist2(a, b));
+            if (!(best > PD_R(0))) return 0;
+        }
+    }
+    pd_real gap = PD_R(0.99) * PD_SQRT(best) - PD_R(1024) * PD_EPS * scale;
+    return gap > PD_R(0) ? gap : PD_R(0);
 }
 
 /* Solid angle of triangle (a, b, c) seen from the origin (Van Oosterom & Strackee 1983). */
@@ -248,6 +404,7 @@ PD_FN void cp_none(cp_result *res)
     res->kt = 0;
     res->touching = 0;
     res->ratio = 0;
+    res->gap = 0;
 }
 
 /*
@@ -320,7 +477,15 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         in.pts_cap = pts_cap;
         ovl_out o;
         ovl_compute(&in, &o);
-        if (!o.hit) return;
+        if (!o.hit) {
+            if (!wall_b) { /* hulls apart (cheap), or else the surfaces (nested shapes) */
+                res->gap = np_hull_gap(&in, wd->radius_ratio[a.shape] * a.size,
+                                       wd->radius_ratio[b.shape] * b.size, CP_GAP_ITERS);
+                if (res->gap <= PD_R(0) && wd->gap_cap > PD_R(0))
+                    res->gap = cp_mesh_gap(&in, wd->gap_cap, rscr, iscr);
+            }
+            return;
+        }
         np_to_world(&a, ra, &o);
         n = o.normal;
         c = o.centroid;

@@ -92,13 +92,24 @@ PD_FN pd_v3 int_omega_body(pd_q4 q, pd_v3 L, pd_v3 inv_i)
     return v3(lb.x * inv_i.x, lb.y * inv_i.y, lb.z * inv_i.z);
 }
 
-/* Orientation drift over dt at constant L (implicit midpoint, see the header comment). */
-PD_FN pd_q4 int_drift_rotation(pd_q4 q, pd_v3 L, pd_v3 inv_i, pd_real dt)
+/*
+ * Orientation drift over dt at constant L (implicit midpoint, see the header comment); *turn
+ * receives the angle turned, rad (a body point at distance r from the centre moves at most r
+ * times it).
+ */
+PD_FN pd_q4 int_drift_rotation_turn(pd_q4 q, pd_v3 L, pd_v3 inv_i, pd_real dt, pd_real *turn)
 {
     pd_v3 w0 = int_omega_body(q, L, inv_i);
     pd_q4 qh = q4_unit(q4_mul(q, q4_exp(v3_scale(w0, PD_R(0.5) * dt))));
-    pd_v3 wh = int_omega_body(qh, L, inv_i);
-    return q4_unit(q4_mul(q, q4_exp(v3_scale(wh, dt))));
+    pd_v3 phi = v3_scale(int_omega_body(qh, L, inv_i), dt);
+    *turn = v3_norm(phi);
+    return q4_unit(q4_mul(q, q4_exp(phi)));
+}
+
+PD_FN pd_q4 int_drift_rotation(pd_q4 q, pd_v3 L, pd_v3 inv_i, pd_real dt)
+{
+    pd_real turn;
+    return int_drift_rotation_turn(q, L, inv_i, dt, &turn);
 }
 
 /* Rotational kinetic energy 1/2 L . omega. */

@@ -148,6 +148,72 @@ PD_FN int np_wall_local(const wb_tree *w, pd_real reach, int cap, PD_GLOBAL int 
     return nt;
 }
 
+/*
+ * A certified lower bound on the distance between particles A and B of `in` (np_setup, A's
+ * frame; rad_a, rad_b their circumradii, m), or 0 when none is found: the gap between their
+ * vertices' projections on a direction u, min_j u.b_j - max_i u.a_i, which bounds the distance
+ * between their convex hulls and so between the solids. u comes from Gilbert's iteration on the
+ * hulls' difference B - A (Gilbert 1966, the first half of GJK): z starts at the centre line
+ * (centroids are inside the hulls), moves to the point nearest the origin on the segment to the
+ * difference's support point in -z, and every iterate's gap is a valid bound (the best is kept).
+ * Stops after `iters` or once the bound is within a quarter of |z| (the hull distance lies between
+ * them). A pair whose hulls meet (a vertex in the other's pocket) gets 0. Only the result's sign
+ * and size matter, never u itself, so the bound is exact up to the rounding subtracted at the end.
+ * Used to skip a separated pair's overlap until the particles have moved that far (contact.cl).
+ */
+PD_FN pd_real np_hull_gap(const ovl_in *in, pd_real rad_a, pd_real rad_b, int iters)
+{
+    pd_v3 tr = v3(in->tr[0], in->tr[1], in->tr[2]), z = tr;
+    const pd_real *r = in->rot;
+    pd_real best = 0;
+    for (int it = 0; it < iters; it++) {
+        pd_real zz = v3_dot(z, z);
+        if (!(zz > PD_R(0))) break;
+        /* u.b_j = (rot^T u).v_j + u.tr, u.a_i = sa (u.v_i): no vertex is transformed */
+        pd_v3 zb = v3(r[0] * z.x + r[3] * z.y + r[6] * z.z, r[1] * z.x + r[4] * z.y + r[7] * z.z,
+                      r[2] * z.x + r[5] * z.y + r[8] * z.z);
+        pd_real hi = -PD_REAL_MAX, lo = PD_REAL_MAX;
+        int ia = 0, jb = 0;
+        for (int i = 0; i < in->nva; i++) {
+            pd_real s = v3_dot(v3_load(in->va, i), z);
+            if (s > hi) {
+                hi = s;
+                ia = i;
+            }
+        }
+        for (int j = 0; j < in->nvb; j++) {
+            pd_real s = v3_dot(v3_load(in->vb, j), zb);
+            if (s < lo) {
+                lo = s;
+                jb = j;
+            }
+        }
+        pd_real zn = PD_SQRT(zz);
+        pd_real gap = (lo + v3_dot(tr, z) - in->sa * hi) / zn;
+        if (gap > best) best = gap;
+        if (!(gap > PD_R(0)) && it > 0 && gap < -PD_R(0.5) * zn) break; /* hulls deep in */
+        if (best >= PD_R(0.75) * zn) break;
+        /* the support point s = b_j - a_i of B - A in -z, and z <- nearest point of [z, s] */
+        pd_v3 vbj = v3_load(in->vb, jb), vai = v3_scale(v3_load(in->va, ia), in->sa);
+        pd_v3 sp = v3_sub(v3_add(v3(r[0] * vbj.x + r[1] * vbj.y + r[2] * vbj.z,
+                                    r[3] * vbj.x + r[4] * vbj.y + r[5] * vbj.z,
+                                    r[6] * vbj.x + r[7] * vbj.y + r[8] * vbj.z),
+                                 tr),
+                          vai);
+        pd_v3 dz = v3_sub(sp, z);
+        pd_real dd = v3_dot(dz, dz);
+        if (!(dd > PD_R(0))) break;
+        pd_real t = -v3_dot(z, dz) / dd;
+        t = t < PD_R(0) ? PD_R(0) : t > PD_R(1) ? PD_R(1) : t;
+        z = v3_add(z, v3_scale(dz, t));
+    }
+    /* the projections' rounding: a few ulps of the magnitudes in play (the centre distance and
+     * the circumradii rad_a, rad_b, m), taken generously */
+    pd_real scale = v3_norm(tr) + rad_a + rad_b;
+    best -= PD_R(1024) * PD_EPS * scale;
+    return best > PD_R(0) ? best : PD_R(0);
+}
+
 /* The overlap's centroid and normal from a's body frame to world coordinates. */
 PD_FN void np_to_world(const np_body *a, const pd_real ra[9], ovl_out *o)
 {

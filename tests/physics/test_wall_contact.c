@@ -23,28 +23,10 @@
 #include "polydem.h"
 #include "grid_box.h"
 #include "test.h"
+#define TEST_RANDOM_SEED 11
+#include "test_random.h"
 #include "unit_shape.h"
 #include "wall_tree.h"
-
-static uint64_t rs = 11;
-static double rnd(void)
-{
-    uint64_t z = (rs += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return (double)((z ^ (z >> 31)) >> 11) / 9007199254740992.0;
-}
-
-static void random_quat(double q[4])
-{
-    double n = 0;
-    for (int c = 0; c < 4; c++) {
-        q[c] = rnd() - 0.5;
-        n += q[c] * q[c];
-    }
-    for (int c = 0; c < 4; c++)
-        q[c] /= sqrt(n);
-}
 
 static const double slab_h[3] = {1, 1, 0.2};
 
@@ -187,7 +169,7 @@ static int run_wall(pd_mesh *wall, const double xw[3], const double qw[4], int n
         if (aligned_every && k % aligned_every == 0)
             memcpy(a.q, qw, sizeof a.q); /* faces parallel to the wall's: coplanar contacts */
         else
-            random_quat(a.q);
+            rnd_quat(a.q);
         /* through the tree */
         ovl_in in;
         double ra[9];
@@ -297,7 +279,7 @@ TEST(particles_on_a_fine_grid_slab)
     int hits = run_wall(wall, x, q, 240, place_slab, 4);
     CHECK(hits >= 100); /* the test must exercise real contacts */
     /* the same wall turned: the tree is searched in the wall's frame */
-    random_quat(q);
+    rnd_quat(q);
     hits = run_wall(wall, x, q, 120, place_slab, 4);
     CHECK(hits >= 50);
     pd_mesh_destroy(wall);
@@ -345,7 +327,7 @@ TEST(particles_against_a_large_nonconvex_rock)
                 (rock->verts[3 * i + k] - mp.centroid[k]) * rock->nverts / rsum;
     rock_r = 1;
     double x[3] = {-2, 0.5, 0.25}, q[4];
-    random_quat(q);
+    rnd_quat(q);
     int hits = run_wall(rock, x, q, 300, place_rock, 0);
     CHECK(hits >= 60);
     pd_mesh_destroy(rock);

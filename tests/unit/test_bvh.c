@@ -10,6 +10,8 @@
 
 #include "bvh.h"
 #include "test.h"
+#define TEST_RANDOM_SEED 42
+#include "test_random.h"
 
 typedef struct {
     bvh_code code;
@@ -91,15 +93,6 @@ static int meet(const double *a, const double *b)
 {
     return a[0] <= b[3] && b[0] <= a[3] && a[1] <= b[4] && b[1] <= a[4] && a[2] <= b[5] &&
            b[2] <= a[5];
-}
-
-static uint64_t rs = 42;
-static double rnd(void)
-{
-    uint64_t z = (rs += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return (double)((z ^ (z >> 31)) >> 11) / 9007199254740992.0;
 }
 
 /* Every query finds exactly the brute-force set; the tree covers each leaf once. */

@@ -7,15 +7,8 @@
 
 #include "contact_history.h"
 #include "test.h"
-
-static uint64_t rs = 3;
-static uint64_t rnd64(void)
-{
-    uint64_t z = (rs += 0x9e3779b97f4a7c15ull);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    return z ^ (z >> 31);
-}
+#define TEST_RANDOM_SEED 3
+#include "test_random.h"
 
 static int key_cmp(const void *a, const void *b)
 {
