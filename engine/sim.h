@@ -45,6 +45,10 @@ typedef struct sim {
     double *wall_local; /* the wall meshes about their centroids (concatenated), for boxes */
     int *wall_voff;
     int walls_move;
+    /* the fastest any point of a moving wall moves, m/s: |v| + |omega| times its farthest vertex
+     * from the rotation centre (walls move at constant velocities) */
+    double wall_speed;
+    double wall_time;         /* the time the walls were last placed at (sim_walls_at) */
     double margin;            /* added to every box: half the largest cohesion range, m */
     double lo[3], inv_ext[3]; /* Morton scene box */
 
@@ -66,10 +70,10 @@ typedef struct sim {
      * wall triangles near it than wall_cap (kernels/contact_pair.h); INT_MAX when none */
     cl_int status_host[3];
     /*
-     * Verlet skin: particle boxes are grown by skin / 2, so the pair list built at positions
-     * x_ref holds every pair that can touch until some particle has moved skin / 2 (the drift
-     * kernel flags status[0]); until then a step reuses the list instead of building the tree
-     * and traversing it. Moving walls rebuild every step.
+     * Verlet skin: particle and wall boxes are grown by skin / 2, so the pair list built at
+     * positions x_ref holds every pair that can touch until some particle has moved skin / 2
+     * (the drift kernel flags status[0]) or some wall has (wall_speed times the time since);
+     * until then a step reuses the list instead of building the tree and traversing it.
      */
     double skin;
     cl_mem x_ref;
@@ -79,6 +83,9 @@ typedef struct sim {
     int list_valid;   /* a list was built and nothing since invalidates it */
     int list_fresh;   /* this step built the list (not reused): state comes from `carry` */
     long long builds; /* pair lists built so far (bench) */
+    long long built_at;     /* the step the list was built at */
+    double built_wall_time; /* the walls' time then */
+    double list_life;       /* steps lists have lasted, smoothed over the last few */
     /*
      * The pair list, its state updated in place while the list is reused; and, on the step a
      * new list is built, the old list's pairs that carry state (ch_has_state), which the new

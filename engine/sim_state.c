@@ -128,6 +128,7 @@ int sim_walls_at(sim *m, double t, pd_error *err)
         }
     }
     size_t b0 = (size_t)m->n;
+    m->wall_time = t;
     rc = sim_write(m, m->x, 3 * b0, 3 * (size_t)W, x, err);
     if (rc == PD_OK) rc = sim_write(m, m->q, 4 * b0, 4 * (size_t)W, q, err);
     if (rc == PD_OK) rc = sim_write(m, m->v, 3 * b0, 3 * (size_t)W, v, err);
@@ -405,6 +406,31 @@ static int upload_params(sim *m, pd_error *err)
     return rc;
 }
 
+/*
+ * m->wall_speed: a bound on how fast any point of any wall moves. A wall's point p moves by
+ * v t + (R(omega t) - 1)(p - center), at most (|v| + |omega| |p - center|) t.
+ */
+static void wall_speeds(sim *m)
+{
+    m->wall_speed = 0;
+    for (int i = 0; i < m->nwall; i++) {
+        const sc_wall *wl = &m->s->wall[i];
+        const double *v = wl->velocity, *om = wl->angular_velocity;
+        double r = 0;
+        for (int j = m->wall_voff[i]; j < m->wall_voff[i + 1]; j++) {
+            double d2 = 0;
+            for (int k = 0; k < 3; k++) {
+                double d = m->wall_c0[3 * i + k] + m->wall_local[3 * j + k] - wl->center[k];
+                d2 += d * d;
+            }
+            r = fmax(r, sqrt(d2));
+        }
+        double speed = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) +
+                       sqrt(om[0] * om[0] + om[1] * om[1] + om[2] * om[2]) * r;
+        m->wall_speed = fmax(m->wall_speed, speed);
+    }
+}
+
 /* Bodies: particle state from the scenario, walls placed by sim_walls_at(0). */
 static int upload_bodies(sim *m, pd_error *err)
 {
@@ -595,6 +621,7 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     }
     /* the contact stage's scratch: one overlap per work-item at a time */
     if ((rc = upload_params(m, err)) != PD_OK || (rc = upload_shapes(m, err)) != PD_OK) goto fail;
+    wall_speeds(m);
     /* Contact work-items: enough work-groups of 64 (cl_launch) to fill every compute unit
      * several times over, within a scratch budget (an overlap of 1280-triangle shapes needs
      * ~250 KB of scratch per work-item). */

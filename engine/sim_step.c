@@ -128,7 +128,12 @@ static int check_status(sim *m, pd_error *err)
 static int reuse_pairs(sim *m, pd_error *err)
 {
     pd_device *dev = m->dev;
-    if (!m->list_valid || m->walls_move) return 0;
+    if (!m->list_valid) return 0;
+    /* walls' boxes carry skin / 2 too: the list holds while no wall has moved that far either
+     * (a ten-millionth taken off for the rounding of the times) */
+    if (m->walls_move &&
+        m->wall_speed * (m->wall_time - m->built_wall_time) >= 0.5 * m->skin * (1 - 1e-7))
+        return 0;
     cl_int e = clEnqueueReadBuffer(dev->queue, m->status, CL_TRUE, 0, sizeof m->status_host,
                                    m->status_host, 0, NULL, NULL);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(status)", e);
@@ -199,6 +204,10 @@ static int list_built(sim *m, pd_error *err)
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueCopyBuffer(reference positions)", e);
     m->list_valid = 1;
     m->builds++;
+    /* how long lists last, smoothed: certificates (contact.cl) die with their list */
+    if (m->builds > 1) m->list_life = 0.5 * m->list_life + 0.5 * (double)(m->step - m->built_at);
+    m->built_at = m->step;
+    m->built_wall_time = m->wall_time;
     return PD_OK;
 }
 
@@ -355,8 +364,9 @@ static int contacts(sim *m, pd_error *err)
     e |= ARG(k, a++, m->pts_cap);
     e |= ARG(k, a++, nwork);
     e |= ARG(k, a++, m->travel);
-    /* certified gaps up to the skin: a list lasts until a particle has moved half of it */
+    /* surfaces' gaps (cp_mesh_gap) certified up to the skin, a list's reach */
     e |= arg_real(m, k, a++, m->skin);
+    e |= arg_real(m, k, a++, m->list_life);
     cl_mem outs[] = {m->force, m->point, m->pairs.spring, m->pairs.kt, m->info};
     for (size_t i = 0; i < sizeof outs / sizeof outs[0]; i++)
         e |= ARG(k, a++, outs[i]);

@@ -36,7 +36,7 @@ __kernel void contact_forces(
     pd_real dt, __global const pd_real *wnode_box, __global const int *wnode_kid,
     __global const int *wnode_off, __global const int *wtri_order, int wall_cap, int nwall,
     __global int *status, __global int *iscr, __global pd_real *rscr, int ilen, int rlen,
-    int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap,
+    int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap, pd_real list_life,
     __global pd_real *force, __global pd_real *point, __global pd_real *spring,
     __global pd_real *kt, __global pd_real *info)
 {
@@ -65,6 +65,7 @@ __kernel void contact_forces(
     wd.nparticles = nparticles;
     wd.dt = dt;
     wd.gap_cap = gap_cap;
+    wd.list_life = list_life;
     wd.wnode_box = wnode_box;
     wd.wnode_kid = wnode_kid;
     wd.wnode_off = wnode_off;
@@ -77,7 +78,7 @@ __kernel void contact_forces(
     for (int c = g; c < npairs; c += nwork) {
         ch_key k = keys[c];
         cp_result r;
-        /* particles' travel since the list was built (walls do not move while a list is kept) */
+        /* particles' travel since the list was built (a wall's pair never holds a certificate) */
         unsigned ib = ch_second(k);
         pd_real moved = travel[ch_first(k)] + (ib < (unsigned)nparticles ? travel[ib] : PD_R(0));
         if (cp_apart(&wd, k)) {

@@ -57,6 +57,7 @@ typedef struct cp_world {
     pd_real dt;
     /* separated polyhedra: the gap cp_mesh_gap certifies at most, m (0: only np_hull_gap's) */
     pd_real gap_cap;
+    pd_real list_life; /* steps pair lists have lasted lately: certificates die with theirs */
     /* the walls' triangle BVHs (wall_bvh.h): wall w's nodes from wnode_off[w]; the leaves'
      * triangle order of a wall of shape s at wtri_order[toff[s] ..]; wall_cap: most triangles of
      * one wall near one particle (np_wall_local's cap) */
@@ -88,6 +89,9 @@ typedef struct cp_result {
 
 /* Gilbert iterations np_hull_gap may take for a separated pair's gap. */
 #define CP_GAP_ITERS 8
+/* cp_mesh_gap is tried for pairs that would take this many steps to close gap_cap, and kept
+ * only when its gap would last that long */
+#define CP_GAP_STEPS 64
 
 /* The body index of the second half of a key (walls follow the particles). */
 PD_FN int cp_body(const cp_world *wd, unsigned id)
@@ -207,9 +211,10 @@ PD_FN pd_real cp_triangle_dist2(const pd_v3 *t, const pd_v3 *u)
  * Works for non-convex shapes that nest in each other's pockets, where np_hull_gap finds
  * nothing. The distances are those of points found on the triangles, so rounding can only place
  * them slightly past the true closest points: 1 % and a few ulps of the scale are taken off.
- * scr: 3 nvb reals (B's vertices in A's frame); iscr: ntb ints.
+ * Gives up (0) as soon as two triangles are found within `least` (m): a gap that small would
+ * not repay the search. scr: 3 nvb reals (B's vertices in A's frame); iscr: ntb ints.
  */
-PD_FN pd_real cp_mesh_gap(const ovl_in *in, pd_real cap, PD_GLOBAL pd_real *scr,
+PD_FN pd_real cp_mesh_gap(const ovl_in *in, pd_real cap, pd_real least, PD_GLOBAL pd_real *scr,
                           PD_GLOBAL int *iscr)
 {
     const pd_real *r = in->rot;
@@ -280,7 +285,7 @@ PD_FN pd_real cp_mesh_gap(const ovl_in *in, pd_real cap, PD_GLOBAL pd_real *scr,
                 pd_min(pd_min(b[0].z, b[1].z), b[2].z) > hi.z)
                 continue;
             best = pd_min(best, cp_triangle_dist2(a, b));
-            if (!(best > PD_R(0))) return 0;
+            if (!(best > least * least)) return 0;
         }
     }
     pd_real gap = PD_R(0.99) * PD_SQRT(best) - PD_R(1024) * PD_EPS * scale;
@@ -479,10 +484,20 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         ovl_compute(&in, &o);
         if (!o.hit) {
             if (!wall_b) { /* hulls apart (cheap), or else the surfaces (nested shapes) */
-                res->gap = np_hull_gap(&in, wd->radius_ratio[a.shape] * a.size,
-                                       wd->radius_ratio[b.shape] * b.size, CP_GAP_ITERS);
-                if (res->gap <= PD_R(0) && wd->gap_cap > PD_R(0))
-                    res->gap = cp_mesh_gap(&in, wd->gap_cap, rscr, iscr);
+                pd_real rad_a = wd->radius_ratio[a.shape] * a.size,
+                        rad_b = wd->radius_ratio[b.shape] * b.size;
+                res->gap = np_hull_gap(&in, rad_a, rad_b, CP_GAP_ITERS);
+                /* the surfaces' gap costs several overlaps: only for pairs slow enough that a
+                 * gap of up to gap_cap could last CP_GAP_STEPS steps, and while lists last
+                 * that long (a resting bed; in a flow, some particle moves half the skin
+                 * every few steps, the list is rebuilt and every certificate with it) */
+                pd_real step =
+                    (v3_norm(v3_sub(v3_load(wd->v, ib), v3_load(wd->v, ia))) +
+                     v3_norm(v3_load(wd->w, ia)) * rad_a + v3_norm(v3_load(wd->w, ib)) * rad_b) *
+                    wd->dt;
+                if (res->gap <= PD_R(0) && wd->gap_cap > CP_GAP_STEPS * step &&
+                    wd->list_life >= CP_GAP_STEPS)
+                    res->gap = cp_mesh_gap(&in, wd->gap_cap, CP_GAP_STEPS * step, rscr, iscr);
             }
             return;
         }

@@ -285,7 +285,7 @@ TEST(separation_gaps_are_lower_bounds)
         np_setup(&set.sh, &a, &b, 0, &in, ra);
         double hg = np_hull_gap(&in, set.radius[a.shape] * a.size, set.radius[b.shape] * b.size,
                                 CP_GAP_ITERS);
-        double mg = cp_mesh_gap(&in, 0.2 * reach, rscr, iscr);
+        double mg = cp_mesh_gap(&in, 0.2 * reach, 0, rscr, iscr);
         hull += hg > 0;
         mesh_only += hg <= 0 && mg > 0;
         double vd = vertex_distance(&set, &a, &b);
@@ -317,7 +317,7 @@ TEST(separation_gaps_are_lower_bounds)
     double ra[9];
     np_setup(&set.sh, &a, &b, 0, &in, ra);
     double hg = np_hull_gap(&in, set.radius[2] * 0.3, set.radius[2] * 0.3, CP_GAP_ITERS);
-    double mg = cp_mesh_gap(&in, 0.1, rscr, iscr);
+    double mg = cp_mesh_gap(&in, 0.1, 0, rscr, iscr);
     printf("  cubes 0.05 m apart: hull gap %.6g m, surface gap %.6g m\n", hg, mg);
     CHECK(hg <= 0.05 && hg > 0.2 * 0.05); /* a bound, not the distance (CP_GAP_ITERS steps) */
     CHECK(mg <= 0.05 && mg >= 0.989 * 0.05);
