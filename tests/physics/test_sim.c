@@ -523,21 +523,21 @@ TEST(bit_identical_reruns)
  * identical states also check that no skipped pair would have touched and that the carried
  * history is the kept one.
  */
-TEST(pair_list_reuse_is_exact)
+static void reuse_is_exact(const char *precision)
 {
     double x1[120], q1[160], x2[120], q2[160];
     long c1 = 0, c2 = 0;
-    if (run_bed("double", 1500, x1, q1, &c1)) return;
+    if (run_bed(precision, 1500, x1, q1, &c1)) return;
     long long reused_builds = bed_builds;
     long skipped = bed_certified;
     bed_no_skin = 1;
-    int rc = run_bed("double", 1500, x2, q2, &c2);
+    int rc = run_bed(precision, 1500, x2, q2, &c2);
     bed_no_skin = 0;
     if (rc) return;
-    printf("  pair list built %lld times with the skin, %lld without, in 1500 steps; %ld "
+    printf("  %s: pair list built %lld times with the skin, %lld without, in 1500 steps; %ld "
            "contacts; %ld pairs skipped as certified apart (every 10th step), %ld without the "
            "skin\n",
-           reused_builds, bed_builds, c1, skipped, bed_certified);
+           precision, reused_builds, bed_builds, c1, skipped, bed_certified);
     CHECK(c1 > 10);
     CHECK_EQ_INT(c1, c2);
     CHECK(memcmp(x1, x2, sizeof x1) == 0);
@@ -546,6 +546,12 @@ TEST(pair_list_reuse_is_exact)
     CHECK(bed_builds > 1400);
     CHECK(skipped > 100); /* the skipping was exercised */
     CHECK_EQ_INT(0, bed_certified);
+}
+
+TEST(pair_list_reuse_is_exact)
+{
+    if (pd_device_has_fp64(dev)) reuse_is_exact("double");
+    reuse_is_exact("single"); /* the certificates' rounding margins in single precision */
 }
 
 /*
