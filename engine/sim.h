@@ -92,7 +92,7 @@ typedef struct sim {
      * pairs look themselves up in: one list's memory plus the touching pairs', not two lists'.
      */
     sim_pairs pairs, carry;
-    int npairs, ncarry;
+    int npairs;
     cl_mem force, point, info, second_list;
     cl_mem second_count, second_off; /* per particle: contacts as second body, their offsets */
     size_t work_cap;                 /* capacity of the per-pair work arrays above */
@@ -121,6 +121,8 @@ void sim_destroy(sim *m);
 /* Reads cnt reals of buffer b from offset `first` (in reals) into doubles. */
 int sim_read(sim *m, cl_mem b, size_t first, size_t cnt, double *out, pd_error *err);
 int sim_write(sim *m, cl_mem b, size_t first, size_t cnt, const double *in, pd_error *err);
+/* Enqueues zeros into the first cnt reals of b. */
+cl_int sim_zero_reals(sim *m, cl_mem b, size_t cnt);
 /* Sets the walls' poses, velocities and boxes for time t (when they move). */
 int sim_walls_at(sim *m, double t, pd_error *err);
 

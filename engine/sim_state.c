@@ -55,6 +55,13 @@ int sim_read(sim *m, cl_mem b, size_t first, size_t cnt, double *out, pd_error *
     return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueReadBuffer", e);
 }
 
+/* All zero bytes: a zero of either precision. */
+cl_int sim_zero_reals(sim *m, cl_mem b, size_t cnt)
+{
+    double z = 0;
+    return clEnqueueFillBuffer(m->dev->queue, b, &z, m->rs, 0, cnt * m->rs, 0, NULL, NULL);
+}
+
 static int write_ints(sim *m, cl_mem b, size_t cnt, const int *in, pd_error *err)
 {
     if (cnt == 0) return PD_OK;
@@ -645,8 +652,7 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->skin = 0.1 * dmin;
     if ((rc = upload_bodies(m, err)) != PD_OK) goto fail;
     cl_int status0[3] = {0, 0x7fffffff, 0x7fffffff}; /* INT_MAX: nothing found */
-    double zd = 0; /* no travel yet (a zero real of either precision is all zero bytes) */
-    e = clEnqueueFillBuffer(dev->queue, m->travel, &zd, rs, 0, rs * n, 0, NULL, NULL);
+    e = sim_zero_reals(m, m->travel, n);             /* no travel yet */
     if (e == CL_SUCCESS)
         e = clEnqueueWriteBuffer(dev->queue, m->status, CL_TRUE, 0, sizeof status0, status0, 0,
                                  NULL, NULL);

@@ -36,13 +36,6 @@ static cl_int arg_real(sim *m, cl_kernel k, int i, double v)
                   : clSetKernelArg(k, (cl_uint)i, sizeof f, &f);
 }
 
-/* Enqueues zeros into the first cnt reals of b (all zero bytes: a zero of either precision). */
-static cl_int zero_reals(sim *m, cl_mem b, size_t cnt)
-{
-    double z = 0;
-    return clEnqueueFillBuffer(m->dev->queue, b, &z, m->rs, 0, cnt * m->rs, 0, NULL, NULL);
-}
-
 static int arg_fail(pd_error *err, const char *kernel)
 {
     return pd_error_set(err, PD_ECL, "opencl: setting the arguments of %s failed", kernel);
@@ -152,7 +145,6 @@ static int keep_history(sim *m, pd_error *err)
     pd_device *dev = m->dev;
     int n = m->n, rc;
     cl_int e = CL_SUCCESS;
-    m->ncarry = 0;
     if (m->npairs == 0) { /* nothing to carry: every particle's segment is empty */
         int zero = 0;
         e = clEnqueueFillBuffer(dev->queue, m->carry_offset, &zero, sizeof zero, 0,
@@ -187,7 +179,6 @@ static int keep_history(sim *m, pd_error *err)
     e |= ARG(k, 8, m->carry.kt);
     if (e != CL_SUCCESS) return arg_fail(err, "history_keep");
     if ((rc = cl_launch(dev, k, (size_t)n, "history_keep", err)) != PD_OK) return rc;
-    m->ncarry = total;
     return PD_OK;
 }
 
@@ -200,7 +191,7 @@ static int list_built(sim *m, pd_error *err)
     if (e == CL_SUCCESS)
         e = clEnqueueFillBuffer(m->dev->queue, m->status, &zero, sizeof zero, 0, sizeof zero, 0,
                                 NULL, NULL);
-    if (e == CL_SUCCESS) e = zero_reals(m, m->travel, (size_t)m->n);
+    if (e == CL_SUCCESS) e = sim_zero_reals(m, m->travel, (size_t)m->n);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueCopyBuffer(reference positions)", e);
     m->list_valid = 1;
     m->builds++;

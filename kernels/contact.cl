@@ -23,6 +23,14 @@
 #include "pd_real.h"
 #include "contact_pair.h"
 
+/* How far the points of pair k's particles have moved since the list was built, at most (a
+ * wall's pair never holds a certificate): read only where a certificate is checked or made. */
+PD_FN pd_real pair_travel(__global const pd_real *travel, ch_key k, int nparticles)
+{
+    unsigned ib = ch_second(k);
+    return travel[ch_first(k)] + (ib < (unsigned)nparticles ? travel[ib] : PD_R(0));
+}
+
 __kernel void contact_forces(
     __global const ch_key *keys, int npairs, int fresh, __global const ch_key *carry_keys,
     __global const int *carry_offset, __global const pd_real *carry_spring,
@@ -78,12 +86,9 @@ __kernel void contact_forces(
     for (int c = g; c < npairs; c += nwork) {
         ch_key k = keys[c];
         cp_result r;
-        /* particles' travel since the list was built (a wall's pair never holds a certificate) */
-        unsigned ib = ch_second(k);
-        pd_real moved = travel[ch_first(k)] + (ib < (unsigned)nparticles ? travel[ib] : PD_R(0));
         if (cp_apart(&wd, k)) {
             cp_none(&r); /* no force, and no history to look up */
-        } else if (!fresh && kt[c] < PD_R(0) && moved < -kt[c]) {
+        } else if (!fresh && kt[c] < PD_R(0) && pair_travel(travel, k, nparticles) < -kt[c]) {
             /* certified apart: kt holds -(gap + travel then); they have not moved that far */
             force[3 * c] = force[3 * c + 1] = force[3 * c + 2] = PD_R(0);
             point[3 * c] = point[3 * c + 1] = point[3 * c + 2] = PD_R(0);
@@ -105,7 +110,9 @@ __kernel void contact_forces(
         v3_store(spring, c, r.spring);
         /* a separated pair keeps its certificate where a touching one keeps its stiffness:
          * -(gap + travel so far), rounded down, valid while the list is (never carried) */
-        kt[c] = r.gap > PD_R(0) ? -(r.gap + moved) * (PD_R(1) - PD_R(4) * PD_EPS) : r.kt;
+        kt[c] = r.gap > PD_R(0)
+                    ? -(r.gap + pair_travel(travel, k, nparticles)) * (PD_R(1) - PD_R(4) * PD_EPS)
+                    : r.kt;
         info[c] = r.touching ? r.ratio : PD_R(-1);
     }
 }

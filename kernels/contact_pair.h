@@ -217,15 +217,9 @@ PD_FN pd_real cp_triangle_dist2(const pd_v3 *t, const pd_v3 *u)
 PD_FN pd_real cp_mesh_gap(const ovl_in *in, pd_real cap, pd_real least, PD_GLOBAL pd_real *scr,
                           PD_GLOBAL int *iscr)
 {
-    const pd_real *r = in->rot;
-    pd_v3 tr = v3(in->tr[0], in->tr[1], in->tr[2]);
     pd_v3 blo = v3(PD_REAL_MAX, PD_REAL_MAX, PD_REAL_MAX), bhi = v3_scale(blo, PD_R(-1));
     for (int j = 0; j < in->nvb; j++) {
-        pd_v3 v = v3_load(in->vb, j);
-        pd_v3 y =
-            v3_add(v3(r[0] * v.x + r[1] * v.y + r[2] * v.z, r[3] * v.x + r[4] * v.y + r[5] * v.z,
-                      r[6] * v.x + r[7] * v.y + r[8] * v.z),
-                   tr);
+        pd_v3 y = ovl_b_to_a(in, v3_load(in->vb, j));
         v3_store(scr, j, y);
         blo = v3(pd_min(blo.x, y.x), pd_min(blo.y, y.y), pd_min(blo.z, y.z));
         bhi = v3(pd_max(bhi.x, y.x), pd_max(bhi.y, y.y), pd_max(bhi.z, y.z));
@@ -243,47 +237,25 @@ PD_FN pd_real cp_mesh_gap(const ovl_in *in, pd_real cap, pd_real least, PD_GLOBA
     pd_v3 qhi = v3_add(v3(pd_min(ahi.x, bhi.x), pd_min(ahi.y, bhi.y), pd_min(ahi.z, bhi.z)), capv);
     int nb = 0;
     for (int u = 0; u < in->ntb; u++) {
-        pd_v3 p[3];
-        for (int q = 0; q < 3; q++)
-            p[q] = v3_load(scr, in->tb[3 * u + q]);
-        pd_v3 lo =
-            v3(pd_min(pd_min(p[0].x, p[1].x), p[2].x), pd_min(pd_min(p[0].y, p[1].y), p[2].y),
-               pd_min(pd_min(p[0].z, p[1].z), p[2].z));
-        pd_v3 hi =
-            v3(pd_max(pd_max(p[0].x, p[1].x), p[2].x), pd_max(pd_max(p[0].y, p[1].y), p[2].y),
-               pd_max(pd_max(p[0].z, p[1].z), p[2].z));
-        if (hi.x < qlo.x || lo.x > qhi.x || hi.y < qlo.y || lo.y > qhi.y || hi.z < qlo.z ||
-            lo.z > qhi.z)
-            continue;
-        iscr[nb++] = u;
+        PD_GLOBAL const int *v = in->tb + 3 * u;
+        if (ovl_tri_meets(v3_load(scr, v[0]), v3_load(scr, v[1]), v3_load(scr, v[2]), qlo, qhi))
+            iscr[nb++] = u;
     }
     pd_real best = cap * cap;
     for (int t = 0; t < in->nta && nb > 0; t++) {
         pd_v3 a[3];
         for (int q = 0; q < 3; q++)
             a[q] = v3_scale(v3_load(in->va, in->ta[3 * t + q]), in->sa);
-        pd_v3 lo = v3_sub(v3(pd_min(pd_min(a[0].x, a[1].x), a[2].x),
-                             pd_min(pd_min(a[0].y, a[1].y), a[2].y),
-                             pd_min(pd_min(a[0].z, a[1].z), a[2].z)),
-                          capv);
-        pd_v3 hi = v3_add(v3(pd_max(pd_max(a[0].x, a[1].x), a[2].x),
-                             pd_max(pd_max(a[0].y, a[1].y), a[2].y),
-                             pd_max(pd_max(a[0].z, a[1].z), a[2].z)),
-                          capv);
-        if (hi.x < qlo.x || lo.x > qhi.x || hi.y < qlo.y || lo.y > qhi.y || hi.z < qlo.z ||
-            lo.z > qhi.z)
+        ovl_tri T; /* its box, grown by cap: B's triangles beyond it are at least cap away */
+        ovl_tri_make(&T, a[0], a[1], a[2], cap);
+        if (T.hi.x < qlo.x || T.lo.x > qhi.x || T.hi.y < qlo.y || T.lo.y > qhi.y ||
+            T.hi.z < qlo.z || T.lo.z > qhi.z)
             continue;
         for (int l = 0; l < nb; l++) {
             pd_v3 b[3];
             for (int q = 0; q < 3; q++)
                 b[q] = v3_load(scr, in->tb[3 * iscr[l] + q]);
-            if (pd_max(pd_max(b[0].x, b[1].x), b[2].x) < lo.x ||
-                pd_min(pd_min(b[0].x, b[1].x), b[2].x) > hi.x ||
-                pd_max(pd_max(b[0].y, b[1].y), b[2].y) < lo.y ||
-                pd_min(pd_min(b[0].y, b[1].y), b[2].y) > hi.y ||
-                pd_max(pd_max(b[0].z, b[1].z), b[2].z) < lo.z ||
-                pd_min(pd_min(b[0].z, b[1].z), b[2].z) > hi.z)
-                continue;
+            if (!ovl_tri_meets(b[0], b[1], b[2], T.lo, T.hi)) continue;
             best = pd_min(best, cp_triangle_dist2(a, b));
             if (!(best > least * least)) return 0;
         }

@@ -194,12 +194,8 @@ PD_FN pd_real np_hull_gap(const ovl_in *in, pd_real rad_a, pd_real rad_b, int it
         if (!(gap > PD_R(0)) && it > 0 && gap < -PD_R(0.5) * zn) break; /* hulls deep in */
         if (best >= PD_R(0.75) * zn) break;
         /* the support point s = b_j - a_i of B - A in -z, and z <- nearest point of [z, s] */
-        pd_v3 vbj = v3_load(in->vb, jb), vai = v3_scale(v3_load(in->va, ia), in->sa);
-        pd_v3 sp = v3_sub(v3_add(v3(r[0] * vbj.x + r[1] * vbj.y + r[2] * vbj.z,
-                                    r[3] * vbj.x + r[4] * vbj.y + r[5] * vbj.z,
-                                    r[6] * vbj.x + r[7] * vbj.y + r[8] * vbj.z),
-                                 tr),
-                          vai);
+        pd_v3 sp =
+            v3_sub(ovl_b_to_a(in, v3_load(in->vb, jb)), v3_scale(v3_load(in->va, ia), in->sa));
         pd_v3 dz = v3_sub(sp, z);
         pd_real dd = v3_dot(dz, dz);
         if (!(dd > PD_R(0))) break;
