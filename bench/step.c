@@ -97,7 +97,7 @@ static long count_contacts(sim *m)
     double *info = malloc(sizeof(double) * (np + 1));
     pd_error err = {0};
     certified = 0;
-    if (info && sim_read(m, m->info, 0, np, info, &err) == PD_OK)
+    if (info && sim_read_info(m, np, info, &err) == PD_OK)
         for (size_t i = 0; i < np; i++) {
             c += info[i] >= 0; /* depth / size when touching, -1 when not, -2 certified apart */
             certified += info[i] == -2;
@@ -189,11 +189,11 @@ static int traversal_compare(sim *m, int reps)
             e |= SETARG(kc, 1, m->left);
             e |= SETARG(kc, 2, m->right);
             e |= SETARG(kc, 3, n);
-            e |= SETARG(kc, 4, m->pbox);
-            e |= SETARG(kc, 5, fb[cur][0]);
-            e |= SETARG(kc, 6, fb[cur][1]);
-            e |= SETARG(kc, 7, nf);
-            e |= SETARG(kc, 8, emit);
+            e |= sim_body_box_args(m, kc, 4);
+            e |= SETARG(kc, 9, fb[cur][0]);
+            e |= SETARG(kc, 10, fb[cur][1]);
+            e |= SETARG(kc, 11, nf);
+            e |= SETARG(kc, 12, emit);
             if (e != CL_SUCCESS) break;
             rc = cl_launch(dev, kc, (size_t)nf, "bfs_count", &err);
             if (rc == PD_OK) rc = dsort_scan(&m->sort, emit, nf, off, &err);
@@ -209,14 +209,14 @@ static int traversal_compare(sim *m, int reps)
             e |= SETARG(kw, 2, m->right);
             e |= SETARG(kw, 3, m->idx);
             e |= SETARG(kw, 4, n);
-            e |= SETARG(kw, 5, m->pbox);
-            e |= SETARG(kw, 6, fb[cur][0]);
-            e |= SETARG(kw, 7, fb[cur][1]);
-            e |= SETARG(kw, 8, nf);
-            e |= SETARG(kw, 9, off);
-            e |= SETARG(kw, 10, fb[1 - cur][0]);
-            e |= SETARG(kw, 11, fb[1 - cur][1]);
-            e |= SETARG(kw, 12, count);
+            e |= sim_body_box_args(m, kw, 5);
+            e |= SETARG(kw, 10, fb[cur][0]);
+            e |= SETARG(kw, 11, fb[cur][1]);
+            e |= SETARG(kw, 12, nf);
+            e |= SETARG(kw, 13, off);
+            e |= SETARG(kw, 14, fb[1 - cur][0]);
+            e |= SETARG(kw, 15, fb[1 - cur][1]);
+            e |= SETARG(kw, 16, count);
             if (e != CL_SUCCESS) break;
             rc = cl_launch(dev, kw, (size_t)nf, "bfs_write", &err);
             cur = 1 - cur;

@@ -98,7 +98,7 @@ static int contact_stats(sim *m, run_host *h, long *contacts, double *max_ratio,
                                    h->keys, 0, NULL, NULL);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(keys)", e);
     int rc = sim_read(m, m->force, 0, 3 * np, h->force, err);
-    if (rc == PD_OK) rc = sim_read(m, m->info, 0, np, h->info, err);
+    if (rc == PD_OK) rc = sim_read_info(m, np, h->info, err);
     if (rc != PD_OK) return rc;
     for (size_t c = 0; c < np; c++) {
         if (h->info[c] >= 0) (*contacts)++; /* depth / size when touching, -1 when not */

@@ -5,7 +5,9 @@
  * Bodies are the n particles followed by the walls: every per-body array (x, q, v, w, size,
  * inv_m, shape, material) has n + nwall entries, so a wall is a body of infinite mass whose
  * shape is its own mesh (in metres about its centroid, size 1) and whose pose the host sets
- * from the wall's prescribed motion. Per-particle arrays (L, inv_i, f, t) have n entries.
+ * from the wall's prescribed motion. Per-particle arrays (L, f, t) have n entries; a particle's
+ * inertia is its shape's (unit_inertia, per unit density and size) times its material's density
+ * times size^5, not stored per particle.
  *
  * A step (sim_step.c), all on the device:
  *   kick (dt/2) -> drift -> [walls moved] -> forces -> kick (dt/2)
@@ -55,14 +57,16 @@ typedef struct sim {
     /* bodies */
     cl_mem x, q, v, w, size, inv_m, shape, material;
     /* particles */
-    cl_mem L, inv_i, f, t;
+    cl_mem L, f, t;
     /* shapes and materials */
     cl_mem vert, tri, voff, toff, vt_off, vt, unit_vol, kind, radius_ratio, params;
+    cl_mem unit_inertia, density; /* per shape: principal moments for size 1 and density 1;
+                                     per material: kg/m^3 */
     /* walls' triangle BVHs (kernels/wall_bvh.h, engine/wall_tree.c) */
     cl_mem wnode_box, wnode_kid, wnode_off, wtri_order;
     int wall_cap; /* most triangles of one wall that can be near one particle */
     /* broad phase */
-    cl_mem pbox, wbox, tbox, left, right, parent, arrivals, codes, idx, codes_tmp, idx_tmp;
+    cl_mem wbox, tbox, left, right, parent, arrivals, codes, idx, codes_tmp, idx_tmp;
     cl_mem count, offset, status;
     cl_mem cand; /* broad phase: the first BVH_CAND partners of each particle, while counting */
     cl_mem carry_offset; /* where each particle's carried pairs begin in carry.keys */
@@ -100,8 +104,8 @@ typedef struct sim {
     cl_mem iscr, rscr;
     int ilen, rlen, pts_cap, nwork;
     /* kernels */
-    cl_kernel k_boxes, k_codes, k_leaves, k_nodes, k_refit, k_count, k_write, k_contact,
-        k_hist_count, k_hist_keep, k_second_count, k_second_fill, k_body, k_kick, k_drift;
+    cl_kernel k_codes, k_leaves, k_nodes, k_refit, k_count, k_write, k_contact, k_hist_count,
+        k_hist_keep, k_second_count, k_second_fill, k_body, k_kick, k_drift;
     dsort sort;
     /* profiling (bench/step): when set, every stage ends with clFinish and its wall time is
      * added to stage_seconds[SIM_STAGE_*] */
@@ -121,6 +125,9 @@ void sim_destroy(sim *m);
 /* Reads cnt reals of buffer b from offset `first` (in reals) into doubles. */
 int sim_read(sim *m, cl_mem b, size_t first, size_t cnt, double *out, pd_error *err);
 int sim_write(sim *m, cl_mem b, size_t first, size_t cnt, const double *in, pd_error *err);
+/* Reads the first cnt pairs' info into doubles (floats on the device in either precision: depth
+ * / smaller size when touching, -1 when not, -2 certified apart). */
+int sim_read_info(sim *m, size_t cnt, double *out, pd_error *err);
 /* Enqueues zeros into the first cnt reals of b. */
 cl_int sim_zero_reals(sim *m, cl_mem b, size_t cnt);
 /* Sets the walls' poses, velocities and boxes for time t (when they move). */
@@ -129,5 +136,8 @@ int sim_walls_at(sim *m, double t, pd_error *err);
 /* sim_step.c: the stages */
 int sim_forces(sim *m, pd_error *err);
 int sim_step(sim *m, int *bad_particle, pd_error *err);
+/* Sets kernel k's arguments first .. first + 4 to the bodies' arrays its particle boxes are
+ * computed from (kernels/broad_phase.cl): x, size, shape, radius_ratio, margin. */
+cl_int sim_body_box_args(sim *m, cl_kernel k, int first);
 
 #endif

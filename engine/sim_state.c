@@ -7,7 +7,7 @@
 #include <string.h>
 
 #define PD_DOUBLE 1
-#include "bvh.h"          /* BVH_CAND */
+#include "bvh.h"          /* BVH_CAND, float boxes */
 #include "contact_pair.h" /* cp_* parameter layout, overlap scratch sizes, force-law helpers */
 #include "overlap_run.h"
 #include "sim.h"
@@ -53,6 +53,36 @@ int sim_read(sim *m, cl_mem b, size_t first, size_t cnt, double *out, pd_error *
             out[i] = m->dbl ? ((double *)h)[i] : (double)((float *)h)[i];
     free(h);
     return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueReadBuffer", e);
+}
+
+int sim_read_info(sim *m, size_t cnt, double *out, pd_error *err)
+{
+    if (cnt == 0) return PD_OK;
+    float *h = malloc(sizeof(float) * cnt);
+    if (!h) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
+    cl_int e = clEnqueueReadBuffer(m->dev->queue, m->info, CL_TRUE, 0, sizeof(float) * cnt, h, 0,
+                                   NULL, NULL);
+    if (e == CL_SUCCESS)
+        for (size_t i = 0; i < cnt; i++)
+            out[i] = h[i];
+    free(h);
+    return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueReadBuffer(pair info)", e);
+}
+
+/* Writes n boxes (lo xyz, hi xyz) to the device's float boxes, rounded outwards (bvh.h). */
+static int write_boxes(sim *m, cl_mem b, int n, const double *box, pd_error *err)
+{
+    float *h = malloc(sizeof(float) * 6 * (size_t)n);
+    if (!h) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
+    for (int i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++) {
+            h[6 * i + k] = bvh_down(box[6 * i + k]);
+            h[6 * i + 3 + k] = bvh_up(box[6 * i + 3 + k]);
+        }
+    cl_int e = clEnqueueWriteBuffer(m->dev->queue, b, CL_TRUE, 0, sizeof(float) * 6 * (size_t)n, h,
+                                    0, NULL, NULL);
+    free(h);
+    return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueWriteBuffer(wall boxes)", e);
 }
 
 /* All zero bytes: a zero of either precision. */
@@ -140,7 +170,7 @@ int sim_walls_at(sim *m, double t, pd_error *err)
     if (rc == PD_OK) rc = sim_write(m, m->q, 4 * b0, 4 * (size_t)W, q, err);
     if (rc == PD_OK) rc = sim_write(m, m->v, 3 * b0, 3 * (size_t)W, v, err);
     if (rc == PD_OK) rc = sim_write(m, m->w, 3 * b0, 3 * (size_t)W, w, err);
-    if (rc == PD_OK) rc = sim_write(m, m->wbox, 0, 6 * (size_t)W, box, err);
+    if (rc == PD_OK) rc = write_boxes(m, m->wbox, W, box, err);
 done:
     free(x);
     free(q);
@@ -259,9 +289,10 @@ static int upload_shapes(sim *m, pd_error *err)
     int *voff = calloc((size_t)ns + 1, sizeof(int)), *toff = calloc((size_t)ns + 1, sizeof(int));
     int *kind = calloc((size_t)ns, sizeof(int));
     double *uvol = calloc((size_t)ns, sizeof(double)), *rr = calloc((size_t)ns, sizeof(double));
+    double *ui = calloc(3 * (size_t)ns, sizeof(double)); /* walls' stay 0: never integrated */
     double *vert = NULL;
     int *tri = NULL, *vt_off = NULL, *vt = NULL, rc = PD_OK;
-    if (!mesh || !voff || !toff || !kind || !uvol || !rr) goto oom;
+    if (!mesh || !voff || !toff || !kind || !uvol || !rr || !ui) goto oom;
     int max_ta = 0, max_va = 0, max_tb = 0, max_vb = 0;
     for (int i = 0; i < ns; i++) {
         if (i < s->nshape) {
@@ -269,6 +300,7 @@ static int upload_shapes(sim *m, pd_error *err)
             mesh[i] = sh->mesh;
             kind[i] = sh->kind == SC_SHAPE_SPHERE;
             rr[i] = sh->radius_ratio;
+            sc_shape_unit_inertia(sh, ui + 3 * i);
         } else {
             mesh[i] = s->wall[i - s->nshape].mesh;
         }
@@ -346,6 +378,7 @@ static int upload_shapes(sim *m, pd_error *err)
     m->unit_vol = mk(m, m->rs * (size_t)ns, &ok, &e);
     m->kind = mk(m, sizeof(int) * (size_t)ns, &ok, &e);
     m->radius_ratio = mk(m, m->rs * (size_t)ns, &ok, &e);
+    m->unit_inertia = mk(m, m->rs * 3 * (size_t)ns, &ok, &e);
     if (!ok) {
         rc = CL_FAIL(err, "clCreateBuffer(shapes)", e);
         goto done;
@@ -359,6 +392,7 @@ static int upload_shapes(sim *m, pd_error *err)
     if (rc == PD_OK) rc = sim_write(m, m->unit_vol, 0, (size_t)ns, uvol, err);
     if (rc == PD_OK) rc = write_ints(m, m->kind, (size_t)ns, kind, err);
     if (rc == PD_OK) rc = sim_write(m, m->radius_ratio, 0, (size_t)ns, rr, err);
+    if (rc == PD_OK) rc = sim_write(m, m->unit_inertia, 0, 3 * (size_t)ns, ui, err);
     goto done;
 oom:
     rc = pd_error_set(err, PD_ENOMEM, "run: out of memory for the shape tables");
@@ -368,6 +402,7 @@ done:
     free(toff);
     free(kind);
     free(uvol);
+    free(ui);
     free(rr);
     free(vert);
     free(tri);
@@ -407,8 +442,12 @@ static int upload_params(sim *m, pd_error *err)
     cl_int e = CL_SUCCESS;
     int ok = 1;
     m->params = mk(m, m->rs * (size_t)M * M * CP_NPARAM, &ok, &e);
+    m->density = mk(m, m->rs * (size_t)M, &ok, &e);
     int rc = ok ? sim_write(m, m->params, 0, (size_t)M * M * CP_NPARAM, par, err)
                 : CL_FAIL(err, "clCreateBuffer(params)", e);
+    for (int a = 0; a < M && rc == PD_OK; a++) /* the integrator's inertia: see sim.h */
+        par[a] = s->mat[a].density;
+    if (rc == PD_OK) rc = sim_write(m, m->density, 0, (size_t)M, par, err);
     free(par);
     return rc;
 }
@@ -443,11 +482,11 @@ static int upload_bodies(sim *m, pd_error *err)
 {
     const sc_particles *p = m->p;
     int n = m->n, B = m->nbody;
-    double *L = malloc(sizeof(double) * 3 * n), *inv_i = malloc(sizeof(double) * 3 * n);
+    double *L = malloc(sizeof(double) * 3 * n);
     double *inv_m = calloc((size_t)B, sizeof(double)), *size = calloc((size_t)B, sizeof(double));
     int *shape = calloc((size_t)B, sizeof(int)), *mat = calloc((size_t)B, sizeof(int));
     int rc = PD_OK;
-    if (!L || !inv_i || !inv_m || !size || !shape || !mat) {
+    if (!L || !inv_m || !size || !shape || !mat) {
         rc = pd_error_set(err, PD_ENOMEM, "run: out of memory for %d particles", n);
         goto done;
     }
@@ -461,7 +500,6 @@ static int upload_bodies(sim *m, pd_error *err)
             L[3 * i + k] = r[k][0] * p->inertia[3 * i] * wb[0] +
                            r[k][1] * p->inertia[3 * i + 1] * wb[1] +
                            r[k][2] * p->inertia[3 * i + 2] * wb[2];
-            inv_i[3 * i + k] = 1 / p->inertia[3 * i + k];
         }
         inv_m[i] = 1 / p->mass[i];
         size[i] = p->size[i];
@@ -478,7 +516,6 @@ static int upload_bodies(sim *m, pd_error *err)
     if (rc == PD_OK) rc = sim_write(m, m->v, 0, 3 * (size_t)n, p->v, err);
     if (rc == PD_OK) rc = sim_write(m, m->w, 0, 3 * (size_t)n, p->w, err);
     if (rc == PD_OK) rc = sim_write(m, m->L, 0, 3 * (size_t)n, L, err);
-    if (rc == PD_OK) rc = sim_write(m, m->inv_i, 0, 3 * (size_t)n, inv_i, err);
     if (rc == PD_OK) rc = sim_write(m, m->inv_m, 0, (size_t)B, inv_m, err);
     if (rc == PD_OK) rc = sim_write(m, m->size, 0, (size_t)B, size, err);
     if (rc == PD_OK) rc = write_ints(m, m->shape, (size_t)B, shape, err);
@@ -486,7 +523,6 @@ static int upload_bodies(sim *m, pd_error *err)
     if (rc == PD_OK) rc = sim_walls_at(m, 0, err);
 done:
     free(L);
-    free(inv_i);
     free(inv_m);
     free(size);
     free(shape);
@@ -512,7 +548,6 @@ static void scene_box(sim *m)
 }
 
 static const char *const kernel_names[][2] = {
-    {"broad_phase", "particle_boxes"},
     {"bvh", "bvh_codes"},
     {"broad_phase", "bvh_leaves"},
     {"bvh", "bvh_nodes"},
@@ -531,10 +566,10 @@ static const char *const kernel_names[][2] = {
 
 static cl_kernel *kernel_slot(sim *m, int i)
 {
-    cl_kernel *slots[] = {&m->k_boxes,      &m->k_codes,     &m->k_leaves,       &m->k_nodes,
-                          &m->k_refit,      &m->k_count,     &m->k_write,        &m->k_contact,
-                          &m->k_hist_count, &m->k_hist_keep, &m->k_second_count, &m->k_second_fill,
-                          &m->k_body,       &m->k_kick,      &m->k_drift};
+    cl_kernel *slots[] = {&m->k_codes,     &m->k_leaves,       &m->k_nodes,       &m->k_refit,
+                          &m->k_count,     &m->k_write,        &m->k_contact,     &m->k_hist_count,
+                          &m->k_hist_keep, &m->k_second_count, &m->k_second_fill, &m->k_body,
+                          &m->k_kick,      &m->k_drift};
     return slots[i];
 }
 
@@ -599,21 +634,24 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->shape = mk(m, sizeof(int) * B, &ok, &e);
     m->material = mk(m, sizeof(int) * B, &ok, &e);
     m->L = mk(m, rs * 3 * n, &ok, &e);
-    m->inv_i = mk(m, rs * 3 * n, &ok, &e);
     m->f = mk(m, rs * 3 * n, &ok, &e);
     m->t = mk(m, rs * 3 * n, &ok, &e);
-    m->pbox = mk(m, rs * 6 * n, &ok, &e);
-    m->wbox = mk(m, rs * 6 * W, &ok, &e);
-    m->tbox = mk(m, rs * 6 * (2 * n - 1), &ok, &e);
+    m->wbox = mk(m, sizeof(float) * 6 * W, &ok, &e);
+    m->tbox = mk(m, sizeof(float) * 6 * (2 * n - 1), &ok, &e); /* boxes are floats (bvh.h) */
     m->left = mk(m, sizeof(int) * n, &ok, &e);
     m->right = mk(m, sizeof(int) * n, &ok, &e);
     m->parent = mk(m, sizeof(int) * 2 * n, &ok, &e);
-    m->arrivals = mk(m, sizeof(int) * n, &ok, &e);
     m->codes = mk(m, sizeof(cl_ulong) * n, &ok, &e);
     m->codes_tmp = mk(m, sizeof(cl_ulong) * n, &ok, &e);
     m->idx = mk(m, sizeof(int) * n, &ok, &e);
     m->idx_tmp = mk(m, sizeof(int) * n, &ok, &e);
     m->count = mk(m, sizeof(int) * n, &ok, &e);
+    /* the refit's arrival counters share count's memory: count is free from keep_history's end
+     * until broad_count, which runs after the refit (one in-order queue) */
+    if (ok && (e = clRetainMemObject(m->count)) == CL_SUCCESS)
+        m->arrivals = m->count;
+    else
+        ok = 0;
     m->offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->carry_offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->cand = mk(m, sizeof(int) * BVH_CAND * n, &ok, &e);
@@ -686,7 +724,8 @@ void sim_destroy(sim *m)
                       &m->shape,
                       &m->material,
                       &m->L,
-                      &m->inv_i,
+                      &m->unit_inertia,
+                      &m->density,
                       &m->f,
                       &m->t,
                       &m->vert,
@@ -703,7 +742,6 @@ void sim_destroy(sim *m)
                       &m->wnode_kid,
                       &m->wnode_off,
                       &m->wtri_order,
-                      &m->pbox,
                       &m->wbox,
                       &m->tbox,
                       &m->left,

@@ -36,6 +36,16 @@ static cl_int arg_real(sim *m, cl_kernel k, int i, double v)
                   : clSetKernelArg(k, (cl_uint)i, sizeof f, &f);
 }
 
+cl_int sim_body_box_args(sim *m, cl_kernel k, int first)
+{
+    cl_int e = ARG(k, first, m->x);
+    e |= ARG(k, first + 1, m->size);
+    e |= ARG(k, first + 2, m->shape);
+    e |= ARG(k, first + 3, m->radius_ratio);
+    e |= arg_real(m, k, first + 4, m->margin + 0.5 * m->skin); /* the skin: see reuse_pairs */
+    return e;
+}
+
 static int arg_fail(pd_error *err, const char *kernel)
 {
     return pd_error_set(err, PD_ECL, "opencl: setting the arguments of %s failed", kernel);
@@ -84,8 +94,8 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     if (need > m->work_cap || !m->force) {
         size_t cap = pair_capacity(need);
         cl_mem *b[] = {&m->force, &m->point, &m->info, &m->second_list};
-        size_t sz[] = {m->rs * 3, m->rs * 3, m->rs, sizeof(int)};
-        m->bytes += (double)(cap - m->work_cap) * (7 * m->rs + sizeof(int));
+        size_t sz[] = {m->rs * 3, m->rs * 3, sizeof(float), sizeof(int)}; /* info: floats */
+        m->bytes += (double)(cap - m->work_cap) * (6 * m->rs + sizeof(float) + sizeof(int));
         m->work_cap = 0;
         for (size_t i = 0; i < sizeof b / sizeof b[0]; i++) {
             if (*b[i]) clReleaseMemObject(*b[i]);
@@ -202,11 +212,25 @@ static int list_built(sim *m, pd_error *err)
     return PD_OK;
 }
 
+/* The arguments broad_count and broad_write share: the tree, the bodies' boxes, the walls'. */
+static cl_int traversal_args(sim *m, cl_kernel k)
+{
+    cl_int e = ARG(k, 0, m->tbox);
+    e |= ARG(k, 1, m->left);
+    e |= ARG(k, 2, m->right);
+    e |= ARG(k, 3, m->idx);
+    e |= ARG(k, 4, m->n);
+    e |= sim_body_box_args(m, k, 5);
+    e |= ARG(k, 10, m->wbox);
+    e |= ARG(k, 11, m->nwall);
+    return e;
+}
+
 /* Broad phase: boxes, tree, traversal; leaves the step's sorted pair keys in m->pairs.keys. */
 static int broad_phase(sim *m, double *t0, pd_error *err)
 {
     pd_device *dev = m->dev;
-    int n = m->n, nw = m->nwall, rc = reuse_pairs(m, err);
+    int n = m->n, rc = reuse_pairs(m, err);
     m->list_fresh = rc == 0;
     if (rc != 0) { /* reused (1) or an error */
         stage_end(m, SIM_TRAVERSE, t0);
@@ -217,20 +241,11 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     /* the top 32 bits of the 63-bit Morton codes (10-11 bits per axis, 1/2048 of the scene
      * box): four radix passes instead of eight; equal codes are ordered by index (Karras) */
     int morton_drop = 31;
-    e |= ARG(m->k_boxes, 0, m->x);
-    e |= ARG(m->k_boxes, 1, m->size);
-    e |= ARG(m->k_boxes, 2, m->shape);
-    e |= ARG(m->k_boxes, 3, m->radius_ratio);
-    e |= ARG(m->k_boxes, 4, n);
-    e |= arg_real(m, m->k_boxes, 5, m->margin + 0.5 * m->skin);
-    e |= ARG(m->k_boxes, 6, m->pbox);
-    if (e != CL_SUCCESS) return arg_fail(err, "particle_boxes");
-    if ((rc = cl_launch(dev, m->k_boxes, (size_t)n, "particle_boxes", err)) != PD_OK) return rc;
 
     /* small runs: the traversal kernels test every pair of boxes instead of building a tree */
     int brute = n <= SIM_BRUTE_MAX;
     if (!brute) {
-        e |= ARG(m->k_codes, 0, m->pbox);
+        e |= ARG(m->k_codes, 0, m->x);
         e |= ARG(m->k_codes, 1, n);
         for (int k = 0; k < 3; k++) {
             e |= arg_real(m, m->k_codes, 2 + k, m->lo[k]);
@@ -246,10 +261,10 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
                          4, err);
         if (rc != PD_OK) return rc;
 
-        e |= ARG(m->k_leaves, 0, m->pbox);
-        e |= ARG(m->k_leaves, 1, m->idx);
-        e |= ARG(m->k_leaves, 2, n);
-        e |= ARG(m->k_leaves, 3, m->tbox);
+        e |= sim_body_box_args(m, m->k_leaves, 0);
+        e |= ARG(m->k_leaves, 5, m->idx);
+        e |= ARG(m->k_leaves, 6, n);
+        e |= ARG(m->k_leaves, 7, m->tbox);
         e |= ARG(m->k_nodes, 0, m->codes);
         e |= ARG(m->k_nodes, 1, n);
         e |= ARG(m->k_nodes, 2, m->left);
@@ -274,17 +289,10 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
         }
     }
     stage_end(m, SIM_BVH, t0);
-    e |= ARG(m->k_count, 0, m->tbox);
-    e |= ARG(m->k_count, 1, m->left);
-    e |= ARG(m->k_count, 2, m->right);
-    e |= ARG(m->k_count, 3, m->idx);
-    e |= ARG(m->k_count, 4, n);
-    e |= ARG(m->k_count, 5, m->pbox);
-    e |= ARG(m->k_count, 6, m->wbox);
-    e |= ARG(m->k_count, 7, nw);
-    e |= ARG(m->k_count, 8, m->count);
-    e |= ARG(m->k_count, 9, m->cand);
-    e |= ARG(m->k_count, 10, brute);
+    e |= traversal_args(m, m->k_count);
+    e |= ARG(m->k_count, 12, m->count);
+    e |= ARG(m->k_count, 13, m->cand);
+    e |= ARG(m->k_count, 14, brute);
     if (e != CL_SUCCESS) return arg_fail(err, "broad_count");
     if ((rc = cl_launch(dev, m->k_count, (size_t)n, "broad_count", err)) != PD_OK) return rc;
     if ((rc = dsort_scan(&m->sort, m->count, n, m->offset, err)) != PD_OK) return rc;
@@ -301,19 +309,12 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     if ((rc = ensure_pairs(m, total, err)) != PD_OK) return rc;
     m->npairs = total;
 
-    e |= ARG(m->k_write, 0, m->tbox);
-    e |= ARG(m->k_write, 1, m->left);
-    e |= ARG(m->k_write, 2, m->right);
-    e |= ARG(m->k_write, 3, m->idx);
-    e |= ARG(m->k_write, 4, n);
-    e |= ARG(m->k_write, 5, m->pbox);
-    e |= ARG(m->k_write, 6, m->wbox);
-    e |= ARG(m->k_write, 7, nw);
-    e |= ARG(m->k_write, 8, m->offset);
-    e |= ARG(m->k_write, 9, m->cand);
-    e |= ARG(m->k_write, 10, m->second_list); /* scratch until the gather lists into it */
-    e |= ARG(m->k_write, 11, m->pairs.keys);
-    e |= ARG(m->k_write, 12, brute);
+    e |= traversal_args(m, m->k_write);
+    e |= ARG(m->k_write, 12, m->offset);
+    e |= ARG(m->k_write, 13, m->cand);
+    e |= ARG(m->k_write, 14, m->second_list); /* scratch until the gather lists into it */
+    e |= ARG(m->k_write, 15, m->pairs.keys);
+    e |= ARG(m->k_write, 16, brute);
     if (e != CL_SUCCESS) return arg_fail(err, "broad_write");
     rc = cl_launch(dev, m->k_write, (size_t)n, "broad_write", err);
     if (rc == PD_OK) rc = list_built(m, err);
@@ -461,7 +462,7 @@ int sim_step(sim *m, int *bad_particle, pd_error *err)
     e |= ARG(k, 1, m->v);
     e |= ARG(k, 2, m->q);
     e |= ARG(k, 3, m->L);
-    e |= ARG(k, 4, m->inv_i);
+    e |= ARG(k, 4, m->material);
     e |= ARG(k, 5, m->w);
     e |= ARG(k, 6, m->n);
     e |= arg_real(m, k, 7, m->dt);
@@ -472,6 +473,8 @@ int sim_step(sim *m, int *bad_particle, pd_error *err)
     e |= ARG(k, 12, m->shape);
     e |= ARG(k, 13, m->radius_ratio);
     e |= ARG(k, 14, m->travel);
+    e |= ARG(k, 15, m->unit_inertia);
+    e |= ARG(k, 16, m->density);
     if (e != CL_SUCCESS) return arg_fail(err, "integrate_drift");
     if ((rc = cl_launch(m->dev, k, (size_t)m->n, "integrate_drift", err)) != PD_OK) return rc;
     if (m->walls_move && (rc = sim_walls_at(m, (double)(m->step + 1) * m->dt, err)) != PD_OK)

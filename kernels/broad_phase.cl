@@ -14,36 +14,47 @@
 #include "bvh.h"
 #include "contact_history.h"
 
-/* Box of each particle: its centre plus or minus the circumradius and a margin (m). */
-__kernel void particle_boxes(__global const pd_real *x, __global const pd_real *size,
-                             __global const int *shape, __global const pd_real *radius_ratio, int n,
-                             pd_real margin, __global pd_real *box)
+/*
+ * The particles' boxes are not stored (a dense bed's 24 bytes per particle): particle i's is its
+ * centre plus or minus its circumradius and a margin (m), rounded outwards to floats (bvh_cube),
+ * computed where it is needed from the bodies' arrays: the kernels take those as five arguments
+ * (x, size, shape, radius_ratio, margin; sim_body_box_args on the host sets them).
+ */
+typedef struct bp_bodies {
+    __global const pd_real *x, *size, *radius_ratio;
+    __global const int *shape;
+    pd_real margin;
+} bp_bodies;
+
+PD_FN bp_bodies bp_bodies_of(__global const pd_real *x, __global const pd_real *size,
+                             __global const int *shape, __global const pd_real *radius_ratio,
+                             pd_real margin)
 {
-    int i = (int)get_global_id(0);
-    if (i >= n) return;
-    pd_real r = radius_ratio[shape[i]] * size[i] + margin;
-    pd_v3 c = v3_load(x, i);
-    __global pd_real *b = box + 6 * i;
-    b[0] = c.x - r;
-    b[1] = c.y - r;
-    b[2] = c.z - r;
-    b[3] = c.x + r;
-    b[4] = c.y + r;
-    b[5] = c.z + r;
+    bp_bodies b = {x, size, radius_ratio, shape, margin};
+    return b;
+}
+
+PD_FN void bp_box(const bp_bodies *b, int i, float *q)
+{
+    bvh_cube(v3_load(b->x, i), b->radius_ratio[b->shape[i]] * b->size[i] + b->margin, q);
 }
 
 /* Leaf k of the tree is the box of particle idx[k] (sorted by Morton code). */
-__kernel void bvh_leaves(__global const pd_real *pbox, __global const int *idx, int n,
-                         __global pd_real *box)
+__kernel void bvh_leaves(__global const pd_real *x, __global const pd_real *size,
+                         __global const int *shape, __global const pd_real *radius_ratio,
+                         pd_real margin, __global const int *idx, int n, __global float *box)
 {
     int k = (int)get_global_id(0);
     if (k >= n) return;
+    bp_bodies b = bp_bodies_of(x, size, shape, radius_ratio, margin);
+    float q[6];
+    bp_box(&b, idx[k], q);
     for (int c = 0; c < 6; c++)
-        box[6 * (n - 1 + k) + c] = pbox[6 * idx[k] + c];
+        box[6 * (n - 1 + k) + c] = q[c];
 }
 
-PD_FN int walls_meeting(__global const pd_real *wbox, int nwall, const pd_real *q,
-                        __global ch_key *out, unsigned self)
+PD_FN int walls_meeting(__global const float *wbox, int nwall, const float *q, __global ch_key *out,
+                        unsigned self)
 {
     int m = 0;
     for (int w = 0; w < nwall; w++)
@@ -59,15 +70,17 @@ PD_FN int walls_meeting(__global const pd_real *wbox, int nwall, const pd_real *
  * a few particles (the host's `brute` flag), the same pairs in the same order as the tree gives,
  * without the tree's ~25 kernel launches per step, which dominate such a step.
  */
-PD_FN int brute_after(__global const pd_real *pbox, int n, const pd_real *q, int i,
-                      __global int *out, int cap)
+PD_FN int brute_after(const bp_bodies *b, int n, const float *q, int i, __global int *out, int cap)
 {
     int m = 0;
-    for (int j = i + 1; j < n; j++)
-        if (bvh_boxes_meet(pbox + 6 * j, q) && bvh_spheres_meet(pbox + 6 * j, q)) {
+    for (int j = i + 1; j < n; j++) {
+        float a[6];
+        bp_box(b, j, a);
+        if (bvh_boxes_meet_priv(a, q) && bvh_spheres_meet_priv(a, q)) {
             if (m < cap) out[m] = j;
             m++;
         }
+    }
     return m;
 }
 
@@ -77,18 +90,20 @@ PD_FN int brute_after(__global const pd_real *pbox, int n, const pd_real *q, int
  * with more.
  */
 #define BROAD_CAP BVH_CAND
-__kernel void broad_count(__global const pd_real *box, __global const int *left,
+__kernel void broad_count(__global const float *box, __global const int *left,
                           __global const int *right, __global const int *idx, int n,
-                          __global const pd_real *pbox, __global const pd_real *wbox, int nwall,
+                          __global const pd_real *x, __global const pd_real *size,
+                          __global const int *shape, __global const pd_real *radius_ratio,
+                          pd_real margin, __global const float *wbox, int nwall,
                           __global int *count, __global int *cand, int brute)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
-    pd_real q[6];
-    for (int c = 0; c < 6; c++)
-        q[c] = pbox[6 * i + c];
+    bp_bodies b = bp_bodies_of(x, size, shape, radius_ratio, margin);
+    float q[6];
+    bp_box(&b, i, q);
     __global int *keep = cand + (size_t)i * BROAD_CAP;
-    int m = brute ? brute_after(pbox, n, q, i, keep, BROAD_CAP)
+    int m = brute ? brute_after(&b, n, q, i, keep, BROAD_CAP)
                   : bvh_query_after(box, left, right, n, q, idx, i, 1, keep, BROAD_CAP);
     count[i] = m + walls_meeting(wbox, nwall, q, 0, (unsigned)i);
 }
@@ -99,17 +114,19 @@ __kernel void broad_count(__global const pd_real *box, __global const int *left,
  * in scratch at the same offsets (an int per pair: the gather's second-body lists, which are
  * filled after this).
  */
-__kernel void broad_write(__global const pd_real *box, __global const int *left,
+__kernel void broad_write(__global const float *box, __global const int *left,
                           __global const int *right, __global const int *idx, int n,
-                          __global const pd_real *pbox, __global const pd_real *wbox, int nwall,
+                          __global const pd_real *x, __global const pd_real *size,
+                          __global const int *shape, __global const pd_real *radius_ratio,
+                          pd_real margin, __global const float *wbox, int nwall,
                           __global const int *offset, __global const int *cand,
                           __global int *scratch, __global ch_key *keys, int brute)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
-    pd_real q[6];
-    for (int c = 0; c < 6; c++)
-        q[c] = pbox[6 * i + c];
+    bp_bodies b = bp_bodies_of(x, size, shape, radius_ratio, margin);
+    float q[6];
+    bp_box(&b, i, q);
     int off = offset[i], cap = offset[i + 1] - off;
     __global int *ids = scratch + off;
     int m = 0;
@@ -120,7 +137,7 @@ __kernel void broad_write(__global const pd_real *box, __global const int *left,
         for (int a = 0; a < m; a++)
             ids[a] = cand[(size_t)i * BROAD_CAP + a];
     } else {
-        m = brute ? brute_after(pbox, n, q, i, ids, m)
+        m = brute ? brute_after(&b, n, q, i, ids, m)
                   : bvh_query_after(box, left, right, n, q, idx, i, 1, ids, m);
     }
     for (int a = 1; a < m; a++) {
@@ -146,16 +163,10 @@ __kernel void broad_write(__global const pd_real *box, __global const int *left,
  * as the next frontier and counts the leaf children that are candidate partners (above the
  * particle, spheres meeting) into count[particle] (integer atomics: the sums are exact).
  */
-PD_FN int bfs_meets(__global const pd_real *box, __global const pd_real *pbox, int i, int node)
-{
-    pd_real q[6];
-    for (int c = 0; c < 6; c++)
-        q[c] = pbox[6 * i + c];
-    return bvh_boxes_meet(box + 6 * node, q);
-}
-
-__kernel void bfs_count(__global const pd_real *box, __global const int *left,
-                        __global const int *right, int n, __global const pd_real *pbox,
+__kernel void bfs_count(__global const float *box, __global const int *left,
+                        __global const int *right, int n, __global const pd_real *x,
+                        __global const pd_real *size, __global const int *shape,
+                        __global const pd_real *radius_ratio, pd_real margin,
                         __global const int *fp, __global const int *fnode, int nf,
                         __global int *emit)
 {
@@ -163,24 +174,29 @@ __kernel void bfs_count(__global const pd_real *box, __global const int *left,
     if (e >= nf) return;
     int i = fp[e], node = fnode[e], m = 0;
     int kids[2] = {left[node], right[node]};
+    bp_bodies b = bp_bodies_of(x, size, shape, radius_ratio, margin);
+    float q[6];
+    bp_box(&b, i, q);
     for (int k = 0; k < 2; k++)
-        m += kids[k] < n - 1 && bfs_meets(box, pbox, i, kids[k]);
+        m += kids[k] < n - 1 && bvh_boxes_meet(box + 6 * kids[k], q);
     emit[e] = m;
 }
 
-__kernel void bfs_write(__global const pd_real *box, __global const int *left,
+__kernel void bfs_write(__global const float *box, __global const int *left,
                         __global const int *right, __global const int *idx, int n,
-                        __global const pd_real *pbox, __global const int *fp,
-                        __global const int *fnode, int nf, __global const int *offset,
-                        __global int *np, __global int *nnode, __global int *count)
+                        __global const pd_real *x, __global const pd_real *size,
+                        __global const int *shape, __global const pd_real *radius_ratio,
+                        pd_real margin, __global const int *fp, __global const int *fnode, int nf,
+                        __global const int *offset, __global int *np, __global int *nnode,
+                        __global int *count)
 {
     int e = (int)get_global_id(0);
     if (e >= nf) return;
     int i = fp[e], node = fnode[e], o = offset[e];
     int kids[2] = {left[node], right[node]};
-    pd_real q[6];
-    for (int c = 0; c < 6; c++)
-        q[c] = pbox[6 * i + c];
+    bp_bodies b = bp_bodies_of(x, size, shape, radius_ratio, margin);
+    float q[6];
+    bp_box(&b, i, q);
     for (int k = 0; k < 2; k++) {
         int c = kids[k];
         if (!bvh_boxes_meet(box + 6 * c, q)) continue;

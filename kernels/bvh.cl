@@ -1,22 +1,20 @@
 /*
  * bvh.cl - the broad phase's build stages over kernels/bvh.h, one work-item per box or node.
- * Built with -DPD_DOUBLE=0 or 1. Boxes are 6 reals (lo xyz, hi xyz). The host sorts (code, index)
+ * Built with -DPD_DOUBLE=0 or 1. Boxes are 6 floats (lo xyz, hi xyz). The host sorts (code, index)
  * between bvh_codes and bvh_nodes and scatters the leaf boxes to positions n - 1 + k.
  */
 #include "pd_real.h"
 #include "bvh.h"
 
-/* Morton code of each box's centre in the scene box [lo, lo + 1/inv), without its `drop` low
- * bits (fewer bits to sort; Karras orders equal codes by index). */
-__kernel void bvh_codes(__global const pd_real *box, int n, pd_real lox, pd_real loy, pd_real loz,
+/* Morton code of each particle's centre x (its box's) in the scene box [lo, lo + 1/inv), without
+ * its `drop` low bits (fewer bits to sort; Karras orders equal codes by index). */
+__kernel void bvh_codes(__global const pd_real *x, int n, pd_real lox, pd_real loy, pd_real loz,
                         pd_real invx, pd_real invy, pd_real invz, __global bvh_code *codes,
                         __global int *index, int drop)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
-    __global const pd_real *b = box + 6 * i;
-    pd_v3 c = v3(PD_R(0.5) * (b[0] + b[3]), PD_R(0.5) * (b[1] + b[4]), PD_R(0.5) * (b[2] + b[5]));
-    codes[i] = bvh_morton(c, v3(lox, loy, loz), v3(invx, invy, invz)) >> drop;
+    codes[i] = bvh_morton(v3_load(x, i), v3(lox, loy, loz), v3(invx, invy, invz)) >> drop;
     index[i] = i;
 }
 
@@ -34,7 +32,7 @@ __kernel void bvh_nodes(__global const bvh_code *codes, int n, __global int *lef
  * node's box and goes on. The fence makes this child's box visible before the counter says so.
  * arrivals must be zero on entry (n - 1 ints).
  */
-__kernel void bvh_refit(__global pd_real *box, __global const int *left, __global const int *right,
+__kernel void bvh_refit(__global float *box, __global const int *left, __global const int *right,
                         __global const int *parent, int n, __global volatile int *arrivals)
 {
     int s = (int)get_global_id(0);

@@ -22,6 +22,7 @@
 typedef ulong bvh_code;
 #define BVH_CLZ64(x) ((int)clz(x))
 #else
+#include <float.h>
 #include <stdint.h>
 typedef uint64_t bvh_code;
 #define BVH_CLZ64(x) ((x) ? __builtin_clzll(x) : 64)
@@ -34,6 +35,46 @@ typedef uint64_t bvh_code;
 
 /* depth bound: prefixes of 63 code bits plus up to 32 index bits on equal codes */
 #define BVH_STACK 128
+
+/*
+ * Boxes are floats in either precision, rounded outwards from the positions' reals: a box only
+ * has to contain its particle, and floats halve the tree's memory (72 of a dense bed's ~1 170
+ * bytes per particle in double precision, bench/RESULTS.md).
+ */
+PD_FN float bvh_down(pd_real x)
+{
+#if PD_DOUBLE && defined(__OPENCL_VERSION__)
+    return convert_float_rtn(x);
+#elif PD_DOUBLE
+    float f = (float)x;
+    return (double)f > x ? nextafterf(f, -INFINITY) : f;
+#else
+    return x;
+#endif
+}
+
+PD_FN float bvh_up(pd_real x)
+{
+#if PD_DOUBLE && defined(__OPENCL_VERSION__)
+    return convert_float_rtp(x);
+#elif PD_DOUBLE
+    float f = (float)x;
+    return (double)f < x ? nextafterf(f, INFINITY) : f;
+#else
+    return x;
+#endif
+}
+
+/* Box [c - r, c + r] (a cube) rounded outwards into b (lo xyz, hi xyz). */
+PD_FN void bvh_cube(pd_v3 c, pd_real r, float *b)
+{
+    b[0] = bvh_down(c.x - r);
+    b[1] = bvh_down(c.y - r);
+    b[2] = bvh_down(c.z - r);
+    b[3] = bvh_up(c.x + r);
+    b[4] = bvh_up(c.y + r);
+    b[5] = bvh_up(c.z + r);
+}
 
 /* Spreads the low 21 bits of v so there are two zero bits between each. */
 PD_FN bvh_code bvh_spread3(bvh_code v)
@@ -101,37 +142,62 @@ PD_FN void bvh_build_node(PD_GLOBAL const bvh_code *codes, int n, int i, PD_GLOB
     parent[b] = i;
 }
 
-/* Box of internal node i from its children's boxes (6 reals per node: lo xyz, hi xyz; leaves
- * follow the n - 1 internal nodes). */
-PD_FN void bvh_node_box(PD_GLOBAL pd_real *box, PD_GLOBAL const int *left,
-                        PD_GLOBAL const int *right, int i)
+/* Box of internal node i from its children's boxes (6 floats per node: lo xyz, hi xyz; leaves
+ * follow the n - 1 internal nodes). min and max are exact: no rounding. */
+PD_FN void bvh_node_box(PD_GLOBAL float *box, PD_GLOBAL const int *left, PD_GLOBAL const int *right,
+                        int i)
 {
-    PD_GLOBAL const pd_real *a = box + 6 * left[i], *b = box + 6 * right[i];
-    PD_GLOBAL pd_real *o = box + 6 * i;
+    PD_GLOBAL const float *a = box + 6 * left[i], *b = box + 6 * right[i];
+    PD_GLOBAL float *o = box + 6 * i;
     for (int k = 0; k < 3; k++) {
-        o[k] = pd_min(a[k], b[k]);
-        o[3 + k] = pd_max(a[3 + k], b[3 + k]);
+        o[k] = a[k] < b[k] ? a[k] : b[k];
+        o[3 + k] = a[3 + k] > b[3 + k] ? a[3 + k] : b[3 + k];
     }
 }
 
-PD_FN int bvh_boxes_meet(PD_GLOBAL const pd_real *a, const pd_real *q)
+/* Whether boxes a and q meet; a in private memory (OpenCL 1.2 has no generic pointers). */
+PD_FN int bvh_boxes_meet_priv(const float *a, const float *q)
 {
     return a[0] <= q[3] && q[0] <= a[3] && a[1] <= q[4] && q[1] <= a[4] && a[2] <= q[5] &&
            q[2] <= a[5];
 }
 
+/* Whether box a (a tree node's or a wall's) meets box q. */
+PD_FN int bvh_boxes_meet(PD_GLOBAL const float *a, const float *q)
+{
+    float b[6] = {a[0], a[1], a[2], a[3], a[4], a[5]};
+    return bvh_boxes_meet_priv(b, q);
+}
+
 /*
  * For boxes that are cubes centred on bounding spheres (the engine's particle boxes): 1 when the
- * spheres inscribed in leaf box a and query box q meet.
+ * spheres inscribed in box a and query box q meet. a in private memory; bvh_spheres_meet for a
+ * tree's leaf.
  */
-PD_FN int bvh_spheres_meet(PD_GLOBAL const pd_real *a, const pd_real *q)
+PD_FN int bvh_spheres_meet_priv(const float *a, const float *q)
 {
-    pd_real dx = (a[0] + a[3]) - (q[0] + q[3]), dy = (a[1] + a[4]) - (q[1] + q[4]),
-            dz = (a[2] + a[5]) - (q[2] + q[5]);
-    /* all doubled: centres and radii; grown by a few ulps so rounding of the boxes never drops
-     * a touching pair */
-    pd_real r = ((a[3] - a[0]) + (q[3] - q[0])) * (PD_R(1) + PD_R(64) * PD_EPS);
+    float dx = (a[0] + a[3]) - (q[0] + q[3]), dy = (a[1] + a[4]) - (q[1] + q[4]),
+          dz = (a[2] + a[5]) - (q[2] + q[5]);
+    /*
+     * All doubled: centres and radii. Rounding the boxes outwards grows each radius but can move
+     * a centre by up to an ulp of the coordinates per axis, and the sums here round too: the sum
+     * of radii is grown by a few ulps of itself and 32 ulps of the largest coordinate, so no
+     * touching pair is dropped.
+     */
+    float m = 0;
+    for (int k = 0; k < 6; k++) {
+        float u = a[k] < 0 ? -a[k] : a[k], v = q[k] < 0 ? -q[k] : q[k];
+        m = u > m ? u : m;
+        m = v > m ? v : m;
+    }
+    float r = ((a[3] - a[0]) + (q[3] - q[0])) * (1.0f + 64 * FLT_EPSILON) + 32 * FLT_EPSILON * m;
     return dx * dx + dy * dy + dz * dz <= r * r;
+}
+
+PD_FN int bvh_spheres_meet(PD_GLOBAL const float *a, const float *q)
+{
+    float b[6] = {a[0], a[1], a[2], a[3], a[4], a[5]};
+    return bvh_spheres_meet_priv(b, q);
 }
 
 /*
@@ -141,8 +207,8 @@ PD_FN int bvh_spheres_meet(PD_GLOBAL const pd_real *a, const pd_real *q)
  * written to out up to cap; returns how many there are (more than cap means the caller retries with
  * more room), -1 when the stack would overflow (it cannot for an LBVH of 2^31 leaves).
  */
-PD_FN int bvh_query_after(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *left,
-                          PD_GLOBAL const int *right, int n, const pd_real *q,
+PD_FN int bvh_query_after(PD_GLOBAL const float *box, PD_GLOBAL const int *left,
+                          PD_GLOBAL const int *right, int n, const float *q,
                           PD_GLOBAL const int *idx, int after, int spheres, PD_GLOBAL int *out,
                           int cap)
 {
@@ -168,9 +234,8 @@ PD_FN int bvh_query_after(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *lef
 }
 
 /* Leaves (sorted positions) whose boxes meet q; see bvh_query_after. */
-PD_FN int bvh_query(PD_GLOBAL const pd_real *box, PD_GLOBAL const int *left,
-                    PD_GLOBAL const int *right, int n, const pd_real *q, PD_GLOBAL int *out,
-                    int cap)
+PD_FN int bvh_query(PD_GLOBAL const float *box, PD_GLOBAL const int *left,
+                    PD_GLOBAL const int *right, int n, const float *q, PD_GLOBAL int *out, int cap)
 {
     return bvh_query_after(box, left, right, n, q, 0, -1, 0, out, cap);
 }

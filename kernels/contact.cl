@@ -17,8 +17,9 @@
  * A particle meets a wall's triangles found in the wall's BVH (wall_bvh.h, np_wall_local); a
  * wall-pair work-item's scratch begins with np_wall_ilen/_rlen(wall_cap) for them.
  * Per pair out: force on the second body (3), the contact point (3), the new
- * tangential spring (3) and stiffness (1) (or certificate), and info (1): depth / smaller size
- * when the bodies touch, -1 when they do not, -2 when skipped as certified apart.
+ * tangential spring (3) and stiffness (1) (or certificate), and info (1 float in either
+ * precision, for statistics): depth / smaller size when the bodies touch, -1 when they do not,
+ * -2 when skipped as certified apart.
  */
 #include "pd_real.h"
 #include "contact_pair.h"
@@ -46,7 +47,7 @@ __kernel void contact_forces(
     __global int *status, __global int *iscr, __global pd_real *rscr, int ilen, int rlen,
     int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap, pd_real list_life,
     __global pd_real *force, __global pd_real *point, __global pd_real *spring,
-    __global pd_real *kt, __global pd_real *info)
+    __global pd_real *kt, __global float *info)
 {
     int g = (int)get_global_id(0);
     if (g >= nwork) return;
@@ -92,7 +93,7 @@ __kernel void contact_forces(
             /* certified apart: kt holds -(gap + travel then); they have not moved that far */
             force[3 * c] = force[3 * c + 1] = force[3 * c + 2] = PD_R(0);
             point[3 * c] = point[3 * c + 1] = point[3 * c + 2] = PD_R(0);
-            info[c] = PD_R(-2);
+            info[c] = -2.0f;
             continue;
         } else if (fresh) {
             /* the carried pairs of the same first body: a few entries to search, not all */
@@ -113,7 +114,7 @@ __kernel void contact_forces(
         kt[c] = r.gap > PD_R(0)
                     ? -(r.gap + pair_travel(travel, k, nparticles)) * (PD_R(1) - PD_R(4) * PD_EPS)
                     : r.kt;
-        info[c] = r.touching ? r.ratio : PD_R(-1);
+        info[c] = r.touching ? (float)r.ratio : -1.0f;
     }
 }
 

@@ -28,18 +28,19 @@ __kernel void integrate_kick(__global pd_real *v, __global pd_real *L, __global 
  * until their particles' travel reaches their certified gap (contact.cl).
  */
 __kernel void integrate_drift(__global pd_real *x, __global const pd_real *v, __global pd_real *q,
-                              __global const pd_real *L, __global const pd_real *inv_i,
+                              __global const pd_real *L, __global const int *material,
                               __global pd_real *omega, int n, pd_real dt, __global int *status,
                               __global const pd_real *x_ref, pd_real half_skin2,
                               __global const pd_real *size, __global const int *shape,
-                              __global const pd_real *radius_ratio, __global pd_real *travel)
+                              __global const pd_real *radius_ratio, __global pd_real *travel,
+                              __global const pd_real *unit_inertia, __global const pd_real *density)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
     pd_v3 xi = v3_add(v3_load(x, i), v3_scale(v3_load(v, i), dt)), Li = v3_load(L, i);
     v3_store(x, i, xi);
     __global pd_real *qi = q + 4 * i;
-    pd_v3 ii = v3_load(inv_i, i);
+    pd_v3 ii = int_inverse_inertia(unit_inertia, shape[i], density[material[i]], size[i]);
     pd_real turn;
     pd_q4 r = int_drift_rotation_turn(q4(qi[0], qi[1], qi[2], qi[3]), Li, ii, dt, &turn);
     qi[0] = r.w;

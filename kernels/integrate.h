@@ -85,6 +85,19 @@ PD_FN pd_v3 int_kick(pd_v3 v, pd_v3 f, pd_real inv_m, pd_real h)
     return v3_add(v, v3_scale(f, inv_m * h));
 }
 
+/*
+ * Inverse principal moments of inertia of a particle of shape `shape`, density rho and size d:
+ * the shape's moments for size 1 and density 1 (unit, 3 per shape) times rho d^5, multiplied in
+ * the order particles.c computes a particle's inertia, so that both hold the same numbers.
+ */
+PD_FN pd_v3 int_inverse_inertia(PD_GLOBAL const pd_real *unit, int shape, pd_real rho, pd_real d)
+{
+    PD_GLOBAL const pd_real *u = unit + 3 * shape;
+    pd_real d3 = d * d * d;
+    return v3(PD_R(1) / (rho * u[0] * d3 * d * d), PD_R(1) / (rho * u[1] * d3 * d * d),
+              PD_R(1) / (rho * u[2] * d3 * d * d));
+}
+
 /* Angular velocity in the body frame from world L (Euler's equations; inv_i: 1/principal I). */
 PD_FN pd_v3 int_omega_body(pd_q4 q, pd_v3 L, pd_v3 inv_i)
 {

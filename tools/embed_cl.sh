@@ -8,14 +8,18 @@ for f in "$@"; do
     name=$(basename "$f" .cl)
     echo "static const char pd_cl_source_${name}[] ="
     awk -v dir="$(dirname "$f")" '
-        function emit(file,   line, inc) {
+        function emit(file,   line, inc, part, n, k) {
             while ((getline line < file) > 0) {
                 if (line ~ /^#include "[^"]+"/) {
                     inc = line; sub(/^#include "/, "", inc); sub(/".*$/, "", inc);
                     if (!(inc in seen)) { seen[inc] = 1; emit(dir "/" inc); }
                     continue;
                 }
-                gsub(/\\/, "\\\\", line); gsub(/"/, "\\\"", line);
+                # each backslash doubled for the C string (by splitting: the escapes of gsub
+                # replacements differ between awks, and mawk halved them)
+                n = split(line, part, /[\\]/); line = part[1];
+                for (k = 2; k <= n; k++) line = line "\\\\" part[k];
+                gsub(/"/, "\\\"", line);
                 print "    \"" line "\\n\"";
             }
             close(file);
