@@ -126,7 +126,7 @@ void sim_destroy(sim *m);
 int sim_read(sim *m, cl_mem b, size_t first, size_t cnt, double *out, pd_error *err);
 int sim_write(sim *m, cl_mem b, size_t first, size_t cnt, const double *in, pd_error *err);
 /* Reads the first cnt pairs' info into doubles (floats on the device in either precision: depth
- * / smaller size when touching, -1 when not, -2 certified apart). */
+ * / smaller size when touching, negative when not: -2 certified apart, see contact.cl). */
 int sim_read_info(sim *m, size_t cnt, double *out, pd_error *err);
 /* Enqueues zeros into the first cnt reals of b. */
 cl_int sim_zero_reals(sim *m, cl_mem b, size_t cnt);

@@ -19,7 +19,8 @@
  * Per pair out: force on the second body (3), the contact point (3), the new
  * tangential spring (3) and stiffness (1) (or certificate), and info (1 float in either
  * precision, for statistics): depth / smaller size when the bodies touch, -1 when they do not,
- * -2 when skipped as certified apart.
+ * -2 when skipped as certified apart, -(3 + k) when apart but too close for a certificate, the
+ * surfaces' gap not to be searched for k more steps (CP_GAP_RETRY).
  */
 #include "pd_real.h"
 #include "contact_pair.h"
@@ -87,6 +88,10 @@ __kernel void contact_forces(
     for (int c = g; c < npairs; c += nwork) {
         ch_key k = keys[c];
         cp_result r;
+        /* steps before a pair whose surfaces' gap search gave up may search again (last step's
+         * info, -(3 + steps); a new list has no such memory) */
+        float last = fresh ? -1.0f : info[c];
+        int wait = last <= -3.0f ? (int)(-last) - 3 : 0;
         if (cp_apart(&wd, k)) {
             cp_none(&r); /* no force, and no history to look up */
         } else if (!fresh && kt[c] < PD_R(0) && pair_travel(travel, k, nparticles) < -kt[c]) {
@@ -102,9 +107,10 @@ __kernel void contact_forces(
             j = j >= 0 ? lo + j : -1;
             pd_v3 s0 = j >= 0 ? v3_load(carry_spring, j) : v3(0, 0, 0);
             pd_real kt0 = j >= 0 ? carry_kt[j] : PD_R(0);
-            cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, &r);
+            cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, 1, &r);
         } else {
-            cp_pair(&wd, k, v3_load(spring, c), pd_max(kt[c], PD_R(0)), is, rs, pts_cap, &r);
+            cp_pair(&wd, k, v3_load(spring, c), pd_max(kt[c], PD_R(0)), is, rs, pts_cap, wait == 0,
+                    &r);
         }
         v3_store(force, c, r.force);
         v3_store(point, c, r.point);
@@ -114,7 +120,10 @@ __kernel void contact_forces(
         kt[c] = r.gap > PD_R(0)
                     ? -(r.gap + pair_travel(travel, k, nparticles)) * (PD_R(1) - PD_R(4) * PD_EPS)
                     : r.kt;
-        info[c] = r.touching ? (float)r.ratio : -1.0f;
+        info[c] = r.touching  ? (float)r.ratio
+                  : r.gave_up ? -(float)(3 + CP_GAP_RETRY)
+                  : wait > 1  ? -(float)(3 + wait - 1)
+                              : -1.0f;
     }
 }
 

@@ -85,6 +85,7 @@ typedef struct cp_result {
     pd_v3 point;   /* contact point, m */
     pd_real gap;   /* two polyhedral particles apart: a certified lower bound on their distance
                       (np_hull_gap), m; 0 otherwise */
+    int gave_up;   /* the surfaces' gap was searched (cp_mesh_gap) and found too small */
 } cp_result;
 
 /* Gilbert iterations np_hull_gap may take for a separated pair's gap. */
@@ -92,7 +93,10 @@ typedef struct cp_result {
 /* cp_mesh_gap is tried for pairs that would take this many steps to close gap_cap, and kept
  * only when its gap would last that long */
 #define CP_GAP_STEPS 64
-
+/* After cp_mesh_gap gave up on a pair (surfaces within CP_GAP_STEPS steps' motion), it is not
+ * searched again for this many steps: such pairs stay close, and in a resting bed they were
+ * hundreds of searches a step (bench/RESULTS.md) */
+#define CP_GAP_RETRY 8
 /* The body index of the second half of a key (walls follow the particles). */
 PD_FN int cp_body(const cp_world *wd, unsigned id)
 {
@@ -382,16 +386,18 @@ PD_FN void cp_none(cp_result *res)
     res->touching = 0;
     res->ratio = 0;
     res->gap = 0;
+    res->gave_up = 0;
 }
 
 /*
  * Evaluates pair `key` with last step's tangential state (spring0, kt0; zero for a new pair).
  * Callers drop the pairs cp_apart rejects first (without their overlap, about half of a
  * polyhedral bed's candidates, and most of a reused list's).
- * in/rscr: the overlap scratch of this work-item (ovl_in's iscr, rscr, pts_cap).
+ * in/rscr: the overlap scratch of this work-item (ovl_in's iscr, rscr, pts_cap). surfaces: the
+ * surfaces' gap (cp_mesh_gap) may be searched for a separated pair (see CP_GAP_RETRY).
  */
 PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, PD_GLOBAL int *iscr,
-                   PD_GLOBAL pd_real *rscr, int pts_cap, cp_result *res)
+                   PD_GLOBAL pd_real *rscr, int pts_cap, int surfaces, cp_result *res)
 {
     int ia = (int)ch_first(key), ib = cp_body(wd, ch_second(key));
     np_body a, b;
@@ -467,9 +473,11 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
                     (v3_norm(v3_sub(v3_load(wd->v, ib), v3_load(wd->v, ia))) +
                      v3_norm(v3_load(wd->w, ia)) * rad_a + v3_norm(v3_load(wd->w, ib)) * rad_b) *
                     wd->dt;
-                if (res->gap <= PD_R(0) && wd->gap_cap > CP_GAP_STEPS * step &&
-                    wd->list_life >= CP_GAP_STEPS)
+                if (res->gap <= PD_R(0) && surfaces && wd->gap_cap > CP_GAP_STEPS * step &&
+                    wd->list_life >= CP_GAP_STEPS) {
                     res->gap = cp_mesh_gap(&in, wd->gap_cap, CP_GAP_STEPS * step, rscr, iscr);
+                    res->gave_up = !(res->gap > PD_R(0));
+                }
             }
             return;
         }
