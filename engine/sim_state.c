@@ -41,32 +41,31 @@ int sim_write(sim *m, cl_mem b, size_t first, size_t cnt, const double *in, pd_e
     return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueWriteBuffer", e);
 }
 
-int sim_read(sim *m, cl_mem b, size_t first, size_t cnt, double *out, pd_error *err)
+/* Reads cnt doubles (dbl) or floats of b from element `first` into doubles. */
+static int read_as_doubles(sim *m, cl_mem b, int dbl, size_t first, size_t cnt, double *out,
+                           pd_error *err)
 {
     if (cnt == 0) return PD_OK;
-    void *h = malloc(m->rs * cnt);
+    size_t es = dbl ? sizeof(double) : sizeof(float);
+    void *h = malloc(es * cnt);
     if (!h) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
-    cl_int e = clEnqueueReadBuffer(m->dev->queue, b, CL_TRUE, m->rs * first, m->rs * cnt, h, 0,
-                                   NULL, NULL);
+    cl_int e =
+        clEnqueueReadBuffer(m->dev->queue, b, CL_TRUE, es * first, es * cnt, h, 0, NULL, NULL);
     if (e == CL_SUCCESS)
         for (size_t i = 0; i < cnt; i++)
-            out[i] = m->dbl ? ((double *)h)[i] : (double)((float *)h)[i];
+            out[i] = dbl ? ((double *)h)[i] : (double)((float *)h)[i];
     free(h);
     return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueReadBuffer", e);
 }
 
+int sim_read(sim *m, cl_mem b, size_t first, size_t cnt, double *out, pd_error *err)
+{
+    return read_as_doubles(m, b, m->dbl, first, cnt, out, err);
+}
+
 int sim_read_info(sim *m, size_t cnt, double *out, pd_error *err)
 {
-    if (cnt == 0) return PD_OK;
-    float *h = malloc(sizeof(float) * cnt);
-    if (!h) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
-    cl_int e = clEnqueueReadBuffer(m->dev->queue, m->info, CL_TRUE, 0, sizeof(float) * cnt, h, 0,
-                                   NULL, NULL);
-    if (e == CL_SUCCESS)
-        for (size_t i = 0; i < cnt; i++)
-            out[i] = h[i];
-    free(h);
-    return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueReadBuffer(pair info)", e);
+    return read_as_doubles(m, m->info, 0, 0, cnt, out, err);
 }
 
 /* Writes n boxes (lo xyz, hi xyz) to the device's float boxes, rounded outwards (bvh.h). */

@@ -321,6 +321,9 @@ TEST(separation_gaps_are_lower_bounds)
     printf("  cubes 0.05 m apart: hull gap %.6g m, surface gap %.6g m\n", hg, mg);
     CHECK(hg <= 0.05 && hg > 0.2 * 0.05); /* a bound, not the distance (CP_GAP_ITERS steps) */
     CHECK(mg <= 0.05 && mg >= 0.989 * 0.05);
+    /* the search gives up (0) once two triangles are within `least`, and not before */
+    CHECK(cp_mesh_gap(&in, 0.1, 0.06, rscr, iscr) == 0);
+    CHECK(cp_mesh_gap(&in, 0.1, 0.04, rscr, iscr) == mg);
     free(iscr);
     free(rscr);
     shapes_free(&set);
