@@ -112,11 +112,13 @@ typedef struct ovl_ctx {
     pd_real tol2, tol3; /* snap bounds for determinants of length^2 and length^3 */
     int flip;           /* 0: B displaced by +eps w, 1: by -eps w */
     int degenerate;     /* a predicate was exactly zero */
-    /* cusp sums */
+    /* cusp sums, about `origin` (A's frame origin, or the nodes' centre when re-summed) */
+    pd_v3 origin;
     pd_real vol;
-    pd_v3 moment; /* first moment of volume */
-    pd_v3 area_a; /* sum of area * outward normal over A's faces inside B */
-    pd_v3 area_b; /* the same over B's faces inside A */
+    pd_real vol_abs; /* sum of the cusps' |volume|: what vol's rounding is relative to */
+    pd_v3 moment;    /* first moment of volume */
+    pd_v3 area_a;    /* sum of area * outward normal over A's faces inside B */
+    pd_v3 area_b;    /* the same over B's faces inside A */
     /* depth mode: project nodes on n instead of storing them */
     int depth_mode;
     pd_v3 n;

@@ -606,6 +606,35 @@ TEST(single_precision_close_to_double)
     pd_mesh_destroy(m);
 }
 
+/*
+ * A cube's corner pressed h into another's face, along its body diagonal: the overlap is the
+ * corner's trirectangular tetrahedron with legs sqrt(3) h, V = (sqrt(3)/2) h^3. Its cusps reach
+ * from A's centre, so they are of the order of the cube whatever h; summed there, single
+ * precision lost V below ~1e-5 of the cube (h < 0.024) and returned no contact. Tolerances:
+ * double, 1e-4, the re-summing bound (sums are kept about A's centre only above 1e4 ulps of their
+ * terms); single, the corner's position carrying ~8 ulps of its 1.37 m distance, tripled by h^3,
+ * plus that bound.
+ */
+TEST(corner_into_face_at_small_depths)
+{
+    pd_mesh *c = builtin("cube", 0);
+    double ang = acos(1 / sqrt(3.0)), sn = sin(ang / 2) / sqrt(2.0);
+    for (double h = 1e-2; h > 5e-5; h /= 10) {
+        pd_pose pb = pose(0.5 + sqrt(3.0) / 2 - h, 0, 0, cos(ang / 2), 0, sn, -sn);
+        double exact = sqrt(3.0) / 2 * h * h * h;
+        pd_contact d = overlap(c, ORIGIN, c, pb, 0);
+        pd_contact f = overlap(c, ORIGIN, c, pb, PD_OVERLAP_SINGLE);
+        double tol_f = 3 * 8 * 1.1920929e-7 * 1.37 / h + 1e-4;
+        printf("  h %.0e m: V %.3e m^3, double %+.1e, single %+.1e relative (tolerance %.1e)\n", h,
+               exact, d.volume / exact - 1, f.volume / exact - 1, tol_f);
+        CHECK(d.hit && f.hit);
+        CHECK_REL(exact, d.volume, 1e-4);
+        CHECK_REL(exact, f.volume, tol_f);
+        CHECK_VEC(1, 0, 0, f.normal, 1e-3); /* from A into B (eq. 4.19) */
+    }
+    pd_mesh_destroy(c);
+}
+
 TEST(opencl_kernel_agrees_with_host)
 {
     pd_device *dev = NULL;
@@ -672,6 +701,7 @@ int main(void)
     RUN(rock_against_closed_wall_mesh);
     RUN(icosphere_overlap_converges_to_spherical_caps);
     RUN(single_precision_close_to_double);
+    RUN(corner_into_face_at_small_depths);
     RUN(opencl_kernel_agrees_with_host);
     RUN(bad_pose_is_an_error_not_a_nan);
     return TEST_DONE();

@@ -565,6 +565,87 @@ TEST(pair_list_reuse_is_exact)
 }
 
 /*
+ * Two Schönhardt prisms whose convex hulls overlap while their surfaces are still apart (one's
+ * corner inside the other's notch; found by bisecting with `polydem overlap` on the meshes and on
+ * their hulls: surfaces meet at 11.35 mm between centres along this line, hulls at 14.53 mm),
+ * closing at 0.1 m/s from 11.60 mm. The hull gap cannot certify them, so the surfaces' gap is
+ * searched (cp_mesh_gap) until it falls within 64 steps' motion, where the search gives up and
+ * then waits CP_GAP_RETRY steps between tries until they touch. A sphere flying past keeps the
+ * pair lists short-lived, as in a flow, so lists are long-lived enough for searches (list_life)
+ * only from the second build on. The same states, bit for bit, as building the list every step
+ * (no certificates, no waits): no wait hides a contact or carries stale state.
+ */
+static const char *nested_json =
+    "{\"name\": \"nested\", \"precision\": \"%s\", \"time\": {\"dt\": 5e-6, \"duration\": 1,"
+    " \"output_interval\": 1}, \"gravity\": [0, 0, 0],"
+    " \"materials\": {\"m\": {\"density\": 2600, \"youngs_modulus\": 2e7, \"poisson_ratio\": "
+    "0.25}},"
+    " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": 0.4, \"damping\": 0.3}],"
+    " \"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}, \"b\": {\"sphere\": {}}},"
+    " \"particles\": [{\"shape\": \"s\", \"material\": \"m\", \"list\": ["
+    "{\"position\": [0, 0, 0], \"velocity\": [-0.01664, -0.044251, 0.016278], \"size\": 0.01},"
+    " {\"position\": [-0.0038596, -0.0102638, 0.0037756], \"velocity\": [0.01664, 0.044251, "
+    "-0.016278], \"orientation\": [0.31743014615435367, 0.30088465738789577, 0.89426708239976, "
+    "0.09483095801063667], \"size\": 0.01}]},"
+    " {\"shape\": \"b\", \"material\": \"m\", \"list\": [{\"position\": [0.1, 0, 0],"
+    " \"velocity\": [0.4, 0, 0], \"size\": 0.01}]}]}";
+
+/* Runs the nested pair for nsteps; counts, over every step, pairs certified apart (info -2) and
+ * pairs whose gap search waits (info <= -3), and the first step in contact. */
+static int run_nested(const char *precision, int no_skin, int nsteps, double *x, double *q,
+                      long *certified, long *waiting, int *first_contact)
+{
+    char json[2000];
+    snprintf(json, sizeof json, nested_json, precision);
+    run r;
+    if (start(&r, json)) return -1;
+    if (no_skin) r.m->skin = 0;
+    *certified = *waiting = 0;
+    *first_contact = -1;
+    for (int i = 1; i <= nsteps; i++) {
+        if (step(&r)) break;
+        double info[16];
+        int np = r.m->npairs < 16 ? r.m->npairs : 16;
+        if (np > 0) get_info(&r, (size_t)np, info);
+        for (int c = 0; c < np; c++) {
+            *certified += info[c] == -2;
+            *waiting += info[c] <= -3;
+            if (info[c] >= 0 && *first_contact < 0) *first_contact = i;
+        }
+    }
+    get(&r, r.m->x, 3 * 3, x);
+    get(&r, r.m->q, 4 * 3, q);
+    finish(&r);
+    return 0;
+}
+
+static void gap_waits_are_exact(const char *precision)
+{
+    double x1[9], q1[12], x2[9], q2[12];
+    long cert1, wait1, cert2, wait2;
+    int touch1, touch2;
+    if (run_nested(precision, 0, 700, x1, q1, &cert1, &wait1, &touch1) ||
+        run_nested(precision, 1, 700, x2, q2, &cert2, &wait2, &touch2))
+        return;
+    printf("  %s: first contact at step %d (%d without the skin); %ld pair-steps certified apart, "
+           "%ld waiting for a gap search (%ld and %ld without the skin)\n",
+           precision, touch1, touch2, cert1, wait1, cert2, wait2);
+    CHECK(touch1 > 300 && touch1 < 700); /* they touch, after closing the 0.25 mm */
+    CHECK_EQ_INT(touch1, touch2);
+    CHECK(cert1 > 10);  /* the surfaces' gap certified them while far enough apart */
+    CHECK(wait1 >= 10); /* and gave up, then waited, once within 64 steps' motion */
+    CHECK_EQ_INT(0, cert2 + wait2);
+    CHECK(memcmp(x1, x2, sizeof x1) == 0);
+    CHECK(memcmp(q1, q2, sizeof q1) == 0);
+}
+
+TEST(gap_search_waits_are_exact)
+{
+    if (pd_device_has_fp64(dev)) gap_waits_are_exact("double");
+    gap_waits_are_exact("single");
+}
+
+/*
  * Moving walls are followed like particles: their boxes carry skin / 2 and the list is kept
  * until a wall could have moved that far (engine/sim_step.c). A paddle sweeping through the bed
  * while turning, against the same run with the list built every step: identical states.
@@ -997,6 +1078,7 @@ int main(void)
     RUN(rotating_impact_matches_host_reference);
     RUN(bit_identical_reruns);
     RUN(pair_list_reuse_is_exact);
+    RUN(gap_search_waits_are_exact);
     RUN(moving_wall_list_reuse_is_exact);
     RUN(single_matches_double);
     RUN(divergence_is_reported);
