@@ -44,6 +44,10 @@ typedef struct rh5_wall {
 enum { F_TIME, F_STEP, F_POS, F_QUAT, F_VEL, F_ANGVEL, F_MESH, NFRAME_DS };
 enum { S_TIME, S_STEP, S_KE, S_CONTACTS, S_BROAD, S_RATIO, S_WALL_TIME, NSTATS_DS };
 
+/* /stats/stage_time/<name>, in the order of rh5_write_stats' stage_time (sim.h's SIM_* stages) */
+static const char *const stage_names[RH5_NSTAGES] = {"integrate", "bvh", "traverse", "contacts",
+                                                     "gather"};
+
 struct rh5_writer {
     char *path, *partial;
     const char *base; /* file name of path, how the XDMF file refers to it */
@@ -58,7 +62,7 @@ struct rh5_writer {
     double *psize;
     int mesh_nv, mesh_nt; /* world-space mesh totals; 0 without RH5_SHAPE_MESHES */
     double *world;        /* 3*mesh_nv scratch */
-    rh5_ext fr[NFRAME_DS], st[NSTATS_DS];
+    rh5_ext fr[NFRAME_DS], st[NSTATS_DS], stage[RH5_NSTAGES];
     long long nframes, nstats;
     double *times; /* frame times, for the XDMF file */
     size_t times_cap;
@@ -499,6 +503,12 @@ static int setup_series(rh5_writer *w, pd_error *err)
         snprintf(p, sizeof p, "/stats/wall_force/%s", w->walls[i].name);
         rc = make_ext(w, &w->walls[i].force, p, D, 3, 0, "N", err);
     }
+    if (!rc) rc = make_group(w, "/stats/stage_time", err);
+    for (int k = 0; k < RH5_NSTAGES && !rc; k++) {
+        char p[64];
+        snprintf(p, sizeof p, "/stats/stage_time/%s", stage_names[k]);
+        rc = make_ext(w, &w->stage[k], p, D, 0, 0, "s", err);
+    }
     return rc;
 }
 
@@ -644,7 +654,8 @@ int rh5_write_frame(rh5_writer *w, double time, long long step, const double *po
 
 int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_energy,
                     long long contacts, long long broad_pairs, double max_overlap_ratio,
-                    double wall_time, const double *wall_forces, pd_error *err)
+                    double wall_time, const double *wall_forces, const double *stage_time,
+                    pd_error *err)
 {
     quiet();
     int rc = check_append(w, "stats", err);
@@ -652,6 +663,10 @@ int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_e
     if (w->nwalls > 0 && !wall_forces) {
         return pd_error_set(err, PD_EINVAL, "%s: stats row %lld: wall forces missing (%d walls)",
                             w->path, w->nstats, w->nwalls);
+    }
+    if (!stage_time) {
+        return pd_error_set(err, PD_EINVAL, "%s: stats row %lld: stage times missing", w->path,
+                            w->nstats);
     }
     const void *data[NSTATS_DS] = {
         &time, &step, &kinetic_energy, &contacts, &broad_pairs, &max_overlap_ratio, &wall_time};
@@ -661,6 +676,13 @@ int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_e
         if (append_row(e, (hsize_t)w->nstats, d) < 0) {
             w->broken = 1;
             return h5fail(w, err, "cannot append stats row %lld to %s", w->nstats, e->path);
+        }
+    }
+    for (int k = 0; k < RH5_NSTAGES; k++) {
+        if (append_row(&w->stage[k], (hsize_t)w->nstats, &stage_time[k]) < 0) {
+            w->broken = 1;
+            return h5fail(w, err, "cannot append stats row %lld to %s", w->nstats,
+                          w->stage[k].path);
         }
     }
     if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) {
@@ -683,6 +705,8 @@ static int close_file(rh5_writer *w)
         if (close_ext(&w->st[k]) < 0) ok = 0;
     for (int i = 0; i < w->nwalls; i++)
         if (close_ext(&w->walls[i].force) < 0) ok = 0;
+    for (int k = 0; k < RH5_NSTAGES; k++)
+        if (close_ext(&w->stage[k]) < 0) ok = 0;
     if (w->file >= 0 && H5Fclose(w->file) < 0) ok = 0;
     w->file = -1;
     return ok ? 0 : -1;
@@ -744,6 +768,8 @@ int rh5_create(const char *path, const char *scenario_json, int double_precision
         w->fr[k].id = -1;
     for (int k = 0; k < NSTATS_DS; k++)
         w->st[k].id = -1;
+    for (int k = 0; k < RH5_NSTAGES; k++)
+        w->stage[k].id = -1;
     /* The XDMF file names the .h5 as "<base>:<dataset>|<selection>": an empty base or one with
      * ':' or '|' could not be referred to. */
     if (!w->base[0] || strpbrk(w->base, ":|")) {

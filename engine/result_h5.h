@@ -19,7 +19,12 @@
  *                   broad_pairs (S) int64, max_overlap_ratio (S) [1], wall_time (S) [s]
  *                   (wall-clock time since the run started, when the row was written; the
  *                   differences between rows time the steps between them), wall_force/<wall>
- *                   (S,3) [N]
+ *                   (S,3) [N], stage_time/<stage> (S) [s] for the stages integrate, bvh
+ *                   (building the particles' tree), traverse (the pair list), contacts (narrow
+ *                   phase, overlaps and contact forces) and gather (forces per particle): the
+ *                   wall time each took in the one step that ended at the row (the first row:
+ *                   the initial force evaluation), timed with the device finishing after every
+ *                   stage, so they sum to a little more than an unsynchronised step
  *   /walls/<name>/  vertices (nv,3) [m] at t=0, triangles (nt,3) int32
  *   /xdmf/          additions for the XDMF file: particle_id (N) int32 = 0..N-1 (the Polyvertex
  *                   connectivity); with RH5_SHAPE_MESHES also vertices (F,V,3) [m], every
@@ -97,11 +102,16 @@ int rh5_set_particles(rh5_writer *w, int n, const int *shape, const int *materia
 int rh5_write_frame(rh5_writer *w, double time, long long step, const double *pos,
                     const double *quat, const double *vel, const double *angvel, pd_error *err);
 
+/* The stages of a step timed in /stats/stage_time: integrate, bvh, traverse, contacts, gather. */
+#define RH5_NSTAGES 5
+
 /* Appends one stats row; wall_time is the wall-clock time (s) since the run started; wall_forces
- * holds 3 values (N) per wall in add order (NULL when there are no walls). Flushes the file. */
+ * holds 3 values (N) per wall in add order (NULL when there are no walls); stage_time holds
+ * RH5_NSTAGES wall times (s) of the step that ends at this row. Flushes the file. */
 int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_energy,
                     long long contacts, long long broad_pairs, double max_overlap_ratio,
-                    double wall_time, const double *wall_forces, pd_error *err);
+                    double wall_time, const double *wall_forces, const double *stage_time,
+                    pd_error *err);
 
 /*
  * Closes the file, writes "<path>.xmf" (through a temporary name), renames "<path>.partial" to

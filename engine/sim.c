@@ -28,6 +28,19 @@ typedef struct run_host {
     double *wall_force;
 } run_host;
 
+_Static_assert(SIM_NSTAGES == RH5_NSTAGES, "the result file names every stage of sim.h");
+
+/* Times the next step stage by stage (on) or runs it unsynchronised (off). The earlier steps'
+ * work still queued is waited for first, or the first stage would be booked for it. */
+static int timed_steps(sim *m, int on, pd_error *err)
+{
+    m->profile = on;
+    if (!on) return PD_OK;
+    memset(m->stage_seconds, 0, sizeof m->stage_seconds);
+    cl_int e = clFinish(m->dev->queue);
+    return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clFinish(before a timed step)", e);
+}
+
 static void host_free(run_host *h)
 {
     free(h->x);
@@ -226,7 +239,9 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
     double last_report = now_seconds(), rate_t0 = last_report, ebound = 0;
     long long rate_s0 = 0;
 
-    if ((rc = sim_forces(m, err)) != PD_OK) goto done;
+    /* The steps that end at a stats row are timed stage by stage (the device finishing after
+     * each) for /stats/stage_time; the others run unsynchronised. */
+    if ((rc = timed_steps(m, 1, err)) != PD_OK || (rc = sim_forces(m, err)) != PD_OK) goto done;
     for (long long step = 0;; step++) {
         int stats_due = step % stats_every == 0 || step == steps;
         int frame_due = step % frame_every == 0 || step == steps;
@@ -257,7 +272,8 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
             pr.contacts = contacts;
             pr.broad_pairs = m->npairs;
             rc = rh5_write_stats(w, t, step, pr.kinetic_energy, contacts, m->npairs, ratio,
-                                 now_seconds() - t_start, m->nwall ? h.wall_force : NULL, err);
+                                 now_seconds() - t_start, m->nwall ? h.wall_force : NULL,
+                                 m->stage_seconds, err);
             if (rc != PD_OK) goto done;
         }
         if (frame_due) {
@@ -288,7 +304,8 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
             goto done;
         }
         int bad = -1;
-        if ((rc = sim_step(m, &bad, err)) != PD_OK) goto done;
+        rc = timed_steps(m, (step + 1) % stats_every == 0 || step + 1 == steps, err);
+        if (rc != PD_OK || (rc = sim_step(m, &bad, err)) != PD_OK) goto done;
         if (bad >= 0) {
             rc = pd_error_set(err, PD_EDIVERGED,
                               "run diverged at step %lld (t = %.6g s): particle %d has a "

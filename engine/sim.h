@@ -28,7 +28,11 @@
 #include "particles.h"
 #include "scenario.h"
 
+/* The stages of a step, as profiling books them. */
+enum { SIM_INTEGRATE, SIM_BVH, SIM_TRAVERSE, SIM_CONTACTS, SIM_GATHER, SIM_NSTAGES };
+
 /* Pairs sorted by key with their tangential state (kernels/contact_history.h). */
+
 typedef struct sim_pairs {
     cl_mem keys, spring, kt;
     size_t cap; /* capacity in pairs */
@@ -107,17 +111,15 @@ typedef struct sim {
     cl_kernel k_codes, k_leaves, k_nodes, k_refit, k_count, k_write, k_contact, k_hist_count,
         k_hist_keep, k_second_count, k_second_fill, k_body, k_kick, k_drift;
     dsort sort;
-    /* profiling (bench/step): when set, every stage ends with clFinish and its wall time is
-     * added to stage_seconds[SIM_STAGE_*] */
+    /* profiling (bench/step, and pd_run for the steps that end at stats rows): when set, every
+     * stage ends with clFinish and its wall time is added to stage_seconds[SIM_*] */
     int profile;
     double bytes; /* device memory this run has allocated (buffers only), bytes */
-    double stage_seconds[5];
+    double stage_seconds[SIM_NSTAGES];
 } sim;
 
 /* Up to this many particles the broad phase tests all pairs of boxes (no tree: fewer launches). */
 #define SIM_BRUTE_MAX 16
-
-enum { SIM_INTEGRATE, SIM_BVH, SIM_TRAVERSE, SIM_CONTACTS, SIM_GATHER, SIM_NSTAGES };
 
 /* sim_state.c: set-up, host <-> device copies, wall motion */
 int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err);

@@ -165,6 +165,30 @@ json_t *result_stats(const char *path, char *msg, size_t ml)
         free(v);
     }
     free_names(names);
+    /* seconds per stage of the step ending at each row: in results written since it was added */
+    json_t *stages = NULL;
+    char **snames = ok ? member_names(f, "/stats/stage_time") : NULL;
+    if (snames && snames[0]) stages = json_object();
+    for (char **st = snames; stages && *st; st++) {
+        char p[300];
+        size_t n = 0;
+        snprintf(p, sizeof p, "/stats/stage_time/%s", *st);
+        json_t *c = column(f, p, 0, &n);
+        if (c && n == rows) {
+            json_object_set_new(stages, *st, c);
+        } else {
+            json_decref(c);
+            json_decref(stages);
+            stages = NULL;
+        }
+    }
+    free_names(snames);
+    if (ok && stages) {
+        json_object_set_new(o, "stage_time", stages);
+        json_object_set_new(units, "stage_time", json_string("s"));
+    } else {
+        json_decref(stages);
+    }
     if (ok) {
         json_object_set_new(o, "wall_force", walls);
         json_object_set_new(units, "wall_force", json_string("N"));

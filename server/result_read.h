@@ -10,8 +10,8 @@
 #include <stddef.h>
 
 /* {"partial": false, "time", "step", "kinetic_energy", "contacts", "broad_pairs",
- *  "max_overlap_ratio", "wall_time" (when the file has it), "wall_force": {"<wall>": [[Fx, Fy,
- *  Fz], ...]}, "units": {...}} */
+ *  "max_overlap_ratio", "wall_time" and "stage_time": {"<stage>": [...]} (when the file has them),
+ *  "wall_force": {"<wall>": [[Fx, Fy, Fz], ...]}, "units": {...}} */
 json_t *result_stats(const char *path, char *msg, size_t msglen);
 
 /* {"count": F, "time": [...]} */

@@ -22,6 +22,9 @@ from bands import Bands  # noqa: E402
 
 SIZE = 0.02         # volume-equivalent diameter, m (Table A.3 gives none; bench/step's)
 DENSITY = 2600      # kg/m^3 (Table A.3 gives none; rock)
+# /stats/stage_time's stages and what the thesis's figure 7.3 calls them
+STAGES = {"integrate": "integration", "bvh": "BVH construction", "traverse": "BVH traversal",
+          "contacts": "narrow phase, overlaps and forces", "gather": "force accumulation"}
 RADIUS_RATIO = 0.945  # Schönhardt circumradius / volume-equivalent diameter (engine lattice cell)
 G = 9.81
 
@@ -98,18 +101,24 @@ def analyze(a):
         pairs, contacts = st["broad_pairs"][()], st["contacts"][()]
         ke = st["kinetic_energy"][()]
         n = h5["particles/mass"].shape[0]
+        # per stage, the step that ends at each row (timed with the device finishing after
+        # every stage); engines before it have no /stats/stage_time
+        stages = {k: 1e3 * st["stage_time"][k][()] for k in STAGES if "stage_time" in st}
     dstep = np.diff(step)
     ms_per_step = 1e3 * np.diff(wall) / np.where(dstep > 0, dstep, 1)
     tm = 0.5 * (t[1:] + t[:-1])
     with open(os.path.join(a.out, "packing.csv"), "w") as f:
         f.write("time_s,step,wall_time_s,broad_pairs,contacts,kinetic_energy_J,"
-                "ms_per_step_since_last_row\n")
+                "ms_per_step_since_last_row%s\n" % "".join(",%s_ms" % k for k in stages))
         for i in range(len(t)):
-            f.write("%.6g,%d,%.6g,%d,%d,%.6g,%s\n" % (t[i], step[i], wall[i], pairs[i],
-                                                      contacts[i], ke[i],
-                                                      "%.6g" % ms_per_step[i - 1] if i else ""))
+            f.write("%.6g,%d,%.6g,%d,%d,%.6g,%s%s\n" % (
+                t[i], step[i], wall[i], pairs[i], contacts[i], ke[i],
+                "%.6g" % ms_per_step[i - 1] if i else "",
+                "".join(",%.6g" % stages[k][i] for k in stages)))
     fig, ax = plt.subplots(figsize=(6.5, 4))
     ax.plot(tm, ms_per_step, "k-", lw=1, label="polydem, whole step (stats rows included)")
+    for k, colour in zip(stages, ["tab:green", "tab:orange", "tab:purple", "tab:red", "tab:blue"]):
+        ax.plot(t[1:], stages[k][1:], "-", color=colour, lw=0.8, label=STAGES[k])
     ax.axvline(meta["first_impact_s"], color="0.6", ls=":", lw=0.8, label="first impact")
     ax.axvline(meta["last_impact_s"], color="0.6", ls="--", lw=0.8, label="last impact (est.)")
     ax.set_xlabel("simulated time (s)")
@@ -154,6 +163,11 @@ def analyze(a):
             "max_kinetic_energy_J": float(ke.max())}
     if summ["ms_per_step_packed"]:
         summ["us_per_pair_step_packed"] = 1e3 * summ["ms_per_step_packed"] / max(pairs[-1], 1)
+    for k in stages:  # share of the timed steps' time, before the first impact and packed
+        for name, sel in (("before_impact", before), ("packed", after)):
+            total = sum(stages[j][1:][sel].sum() for j in stages)
+            if total > 0:
+                summ["stage_share_%s_%s" % (name, k)] = float(stages[k][1:][sel].sum() / total)
     study.write_json(os.path.join(a.out, "summary.json"), summ)
     for k, v in summ.items():
         print("  %-28s %s" % (k, v))

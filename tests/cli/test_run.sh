@@ -54,7 +54,9 @@ for p in "/frames/position Dataset {5/Inf, 2, 3}" "/frames/orientation Dataset {
     "/frames/time Dataset {5/Inf}" "/stats/kinetic_energy Dataset {21/Inf}" \
     "/stats/contacts Dataset {21/Inf}" "/stats/broad_pairs Dataset {21/Inf}" \
     "/stats/max_overlap_ratio Dataset {21/Inf}" "/stats/wall_force/floor Dataset {21/Inf, 3}" \
-    "/stats/wall_time Dataset {21/Inf}" \
+    "/stats/wall_time Dataset {21/Inf}" "/stats/stage_time/integrate Dataset {21/Inf}" \
+    "/stats/stage_time/bvh Dataset {21/Inf}" "/stats/stage_time/traverse Dataset {21/Inf}" \
+    "/stats/stage_time/contacts Dataset {21/Inf}" "/stats/stage_time/gather Dataset {21/Inf}" \
     "/particles/mass Dataset {2}" "/particles/shape Dataset {2}" "/shapes/ball/vertices" \
     "/shapes/s/triangles" "/walls/floor/vertices"; do
     tr -s ' ' <"$tmp/ls" | grep -qF "$p" || missing="$missing [$p]"
@@ -73,6 +75,30 @@ mass=$(h5dump -d /particles/mass "$tmp/drop.h5" | sed -n 's/^ *(0): *\([^,]*\), 
 if awk -v f="$fz" -v m="$mass" 'BEGIN { split(m, a, " "); w = (a[1] + a[2]) * 9.81; exit !(f < -w) }'; then
     ok wall_force_points_down
 else bad wall_force_points_down "Fz '$fz' masses '$mass'"; fi
+
+# per-stage times: each row times the one step that ends at it (the first row, the initial force
+# evaluation), so the stages are non-negative, sum to more than zero, and fit in the wall-clock
+# interval since the previous row. With a row every step, times carried over from earlier steps
+# (not reset per row) overflow that interval within a few rows.
+sed -e 's/"duration": 0.02/"duration": 0.0005/' -e 's/"stats_interval": 0.001/"stats_interval": 1e-5/' \
+    -e 's/"output_interval": 0.005/"output_interval": 0.0005/' "$tmp/drop.json" >"$tmp/every.json"
+$POLYDEM run "$tmp/every.json" -o "$tmp/every.h5" --quiet >"$tmp/out" 2>&1 || cat "$tmp/out"
+column() { h5dump -m %.17g -y -w 0 -d "$1" "$tmp/every.h5" | awk '/DATA \{/ { getline; gsub(/,/, " "); print; exit }'; }
+{
+    column /stats/wall_time
+    for st in integrate bvh traverse contacts gather; do column "/stats/stage_time/$st"; done
+} >"$tmp/stages"
+if awk 'NR == 1 { for (i = 1; i <= NF; i++) wt[i] = $i; n = NF; next }
+        { if (NF != n) bad = "rows " NF " != " n
+          for (i = 1; i <= NF; i++) { if ($i < 0) bad = "negative time"; sum[i] += $i } }
+        END { for (i = 1; i <= n && !bad; i++) {
+                  span = i == 1 ? wt[1] : wt[i] - wt[i - 1]
+                  if (!(sum[i] > 0)) bad = "row " i - 1 ": stages sum to 0"
+                  else if (sum[i] > span) bad = "row " i - 1 ": stages " sum[i] " s > interval " span " s" }
+              if (n != 51) bad = bad " " n " rows"
+              if (bad) { print bad; exit 1 } }' "$tmp/stages" >"$tmp/why"; then
+    ok stage_times_per_row
+else bad stage_times_per_row "$(cat "$tmp/why")"; fi
 
 $POLYDEM run "$tmp/drop.json" -o "$tmp/q.h5" --quiet >"$tmp/out" 2>&1
 if [ $? -eq 0 ] && [ ! -s "$tmp/out" ] && [ -f "$tmp/q.h5" ]; then ok run_quiet; else bad run_quiet "$(cat "$tmp/out")"; fi

@@ -105,6 +105,7 @@ code=$(req GET "/v1/jobs/$id/stats")
 check stats_200 "200 False" "$code $(jget "$tmp/body" 'str(d["partial"])')"
 check stats_columns true "$(jget "$tmp/body" 'str(len(d["time"]) > 0 and len(set(len(d[k]) for k in ["time", "step", "kinetic_energy", "contacts", "broad_pairs", "max_overlap_ratio"])) == 1).lower()')"
 check stats_wall_time true "$(jget "$tmp/body" 'str(len(d["wall_time"]) == len(d["time"]) and d["wall_time"] == sorted(d["wall_time"])).lower()')"
+check stats_stage_time "bvh contacts gather integrate traverse true s" "$(jget "$tmp/body" '" ".join(sorted(d["stage_time"])) + " " + str(all(len(v) == len(d["time"]) and min(v) >= 0 for v in d["stage_time"].values())).lower() + " " + d["units"]["stage_time"]')"
 check stats_units "s J" "$(jget "$tmp/body" 'd["units"]["time"] + " " + d["units"]["kinetic_energy"]')"
 code=$(req GET "/v1/jobs/$id/frames")
 nf=$(jget "$tmp/body" 'd["count"]')

@@ -239,8 +239,9 @@ static int write_run(const char *path, int fields, int close_it, pd_error *err)
     }
     for (int s = 0; s < 4; s++) {
         double wf[3] = {s, -s, 9.81 * s};
+        double st[RH5_NSTAGES] = {0.01 * s, 0.02 * s, 0.03 * s, 0.04 * s, 0.05 * s};
         if (rh5_write_stats(w, 0.1 * s, 40LL * s, 0.5 * s, 7LL * s, 11LL * s, 0.001 * s, 2.5 * s,
-                            wf, err))
+                            wf, st, err))
             goto fail;
     }
     if (!close_it) {
@@ -420,11 +421,20 @@ TEST(roundtrip_hdf5)
     CHECK_NEAR(2, d[6], 0);
     CHECK_NEAR(-2, d[7], 0);
     CHECK_NEAR(9.81 * 2, d[8], 0);
+    static const char *const stages[RH5_NSTAGES] = {"integrate", "bvh", "traverse", "contacts",
+                                                    "gather"};
+    for (int k = 0; k < RH5_NSTAGES; k++) {
+        char p[64];
+        snprintf(p, sizeof p, "/stats/stage_time/%s", stages[k]);
+        CHECK_EQ_INT(1, read_ds(f, p, H5T_NATIVE_DOUBLE, d, 64, dims));
+        CHECK_EQ_INT(4, dims[0]);
+        CHECK_NEAR(0.01 * (k + 1) * 3, d[3], 0);
+    }
 
     /* units: on every dataset, and the right ones where they matter */
     units_count u = {0};
     CHECK(H5Lvisit(f, H5_INDEX_NAME, H5_ITER_INC, check_units_cb, &u) >= 0);
-    CHECK_EQ_INT(28, u.datasets); /* 4 shapes, 2 walls, 4 particles, 4 xdmf, 6 frames, 8 stats */
+    CHECK_EQ_INT(33, u.datasets); /* 4 shapes, 2 walls, 4 particles, 4 xdmf, 6 frames, 13 stats */
     CHECK_EQ_INT(0, u.missing);
     if (u.missing) printf("  first dataset without units: %s\n", u.first_missing);
     static const char *const units[][2] = {{"/frames/position", "m"},
@@ -437,6 +447,7 @@ TEST(roundtrip_hdf5)
                                            {"/particles/size", "m"},
                                            {"/stats/kinetic_energy", "J"},
                                            {"/stats/wall_force/floor", "N"},
+                                           {"/stats/stage_time/contacts", "s"},
                                            {"/shapes/cube/triangles", ""},
                                            {"/walls/floor/vertices", "m"},
                                            {"/stats/max_overlap_ratio", "1"},
@@ -570,7 +581,7 @@ TEST(error_frame_before_particles)
     CHECK_EQ_INT(PD_EINVAL, rh5_write_frame(w, 0, 0, pos, q, pos, NULL, &err));
     CHECK_STR_CONTAINS(err.msg, path);
     CHECK_STR_CONTAINS(err.msg, "particle count unknown");
-    CHECK_EQ_INT(PD_EINVAL, rh5_write_stats(w, 0, 0, 0, 0, 0, 0, 0, NULL, &err));
+    CHECK_EQ_INT(PD_EINVAL, rh5_write_stats(w, 0, 0, 0, 0, 0, 0, 0, NULL, NULL, &err));
     CHECK_STR_CONTAINS(err.msg, "rh5_set_particles first");
     /* closing a result without particles discards it */
     CHECK_EQ_INT(PD_EINVAL, rh5_close(w, &err));
@@ -608,6 +619,8 @@ TEST(error_bad_input_keeps_writer_usable)
     CHECK_EQ_INT(PD_EINVAL, rh5_write_frame(w, 0, 0, pos, q, NULL, NULL, &err));
     CHECK_STR_CONTAINS(err.msg, "velocity yes");
     CHECK_EQ_INT(0, rh5_write_frame(w, 0, 0, pos, q, pos, NULL, &err));
+    CHECK_EQ_INT(PD_EINVAL, rh5_write_stats(w, 0, 0, 0, 0, 0, 0, 0, NULL, NULL, &err));
+    CHECK_STR_CONTAINS(err.msg, "stats row 0: stage times missing");
     CHECK_EQ_INT(0, rh5_close(w, &err));
     hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
     hsize_t dims[3];
