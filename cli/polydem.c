@@ -277,9 +277,10 @@ static int cmd_validate(int argc, char **argv)
         printf("{\"valid\": true, \"particles\": %ld, \"shapes\": %d, \"materials\": %d, "
                "\"walls\": %d, \"dt_s\": %.17g, \"duration_s\": %.17g, \"steps\": %ld, "
                "\"dt_stable_s\": %.17g, \"dt_rayleigh_s\": %.17g, \"hertz_contact_time_s\": "
-               "%.17g, \"memory_bytes\": %.0f}\n",
+               "%.17g, \"memory_bytes\": %.0f, \"contact_resolution_m\": %.17g}\n",
                m.particles, m.shapes, m.materials, m.walls, m.dt, m.duration, m.steps, m.dt_stable,
-               m.dt_rayleigh, isfinite(m.dt_hertz) ? m.dt_hertz : -1, m.memory_bytes);
+               m.dt_rayleigh, isfinite(m.dt_hertz) ? m.dt_hertz : -1, m.memory_bytes,
+               m.contact_resolution);
     } else {
         printf("%s: valid\n", file);
         printf("  particles: %ld (%d shapes, %d materials, %d walls)\n", m.particles, m.shapes,
@@ -295,6 +296,15 @@ static int cmd_validate(int argc, char **argv)
             printf("  memory estimate: %.1f KiB\n", m.memory_bytes / 1024.0);
         else
             printf("  memory estimate: %.1f MiB\n", m.memory_bytes / 1048576.0);
+        if (m.contact_resolution > 0)
+            printf("  polyhedral contacts resolved to about %.2g m (64 ulps of the largest "
+                   "coordinate in play)\n",
+                   m.contact_resolution);
+        if (m.contact_resolution > 1e-8) /* single precision, or walls a million metres long */
+            printf("  warning: contact depths below %.2g m are not resolved, and particles "
+                   "resting on walls or on each other can gain energy: use \"precision\": "
+                   "\"double\" (docs/SCENARIO.md)\n",
+                   m.contact_resolution);
     }
     pd_scenario_destroy(sc);
     return 0;

@@ -183,6 +183,10 @@ typedef struct pd_scenario_summary {
     double dt_hertz;     /* shortest Hertz contact time at the scenario's speeds, s */
     double dt_stable;    /* min(0.3 dt_rayleigh, dt_hertz / 20), s */
     double memory_bytes; /* device memory estimate, bytes */
+    /* Polyhedral contacts resolve lengths to 64 ulps of the largest coordinate in play (a pair of
+     * the largest particles, or a wall about its centroid): this many metres at the scenario's
+     * precision; 0 without polyhedra. Contact depths below it are not resolved. */
+    double contact_resolution;
 } pd_scenario_summary;
 
 void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out);

@@ -176,4 +176,34 @@ void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out)
         if (s->wall[w].mesh)
             bytes += s->wall[w].mesh->nverts * 3 * r + s->wall[w].mesh->ntris * (12.0 + 14 * r);
     out->memory_bytes = bytes;
+    /*
+     * The overlap's snapping resolution (kernels/overlap.h: OVL_SNAP = 64 ulps of the largest
+     * coordinate in play, in a particle's frame): two of the largest polyhedra side by side, or a
+     * wall's farthest vertex from its centroid (wall triangles near a particle are used whole).
+     */
+    double span = 0;
+    int poly = 0;
+    for (int i = 0; i < s->ngroup; i++) {
+        const sc_group *g = &s->group[i];
+        const sc_shape *sh = &s->shape[g->shape];
+        if (!sh->mesh) continue;
+        poly = 1;
+        double big = g->size.max;
+        for (long k = 0; g->list && k < g->count; k++)
+            big = fmax(big, g->list[k].size);
+        span = fmax(span, 4 * sh->radius_ratio * big);
+    }
+    for (int w = 0; poly && w < s->nwall; w++) {
+        const pd_mesh *m = s->wall[w].mesh;
+        double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+        for (int j = 0; m && j < m->nverts; j++)
+            for (int k = 0; k < 3; k++) {
+                lo[k] = fmin(lo[k], m->verts[3 * j + k]);
+                hi[k] = fmax(hi[k], m->verts[3 * j + k]);
+            }
+        for (int k = 0; m && m->nverts > 0 && k < 3; k++)
+            span = fmax(span, hi[k] - lo[k]);
+    }
+    double eps = s->double_precision ? 2.220446049250313e-16 : 1.1920929e-7;
+    out->contact_resolution = poly ? 64 * eps * span : 0;
 }

@@ -178,6 +178,15 @@ if $POLYDEM validate examples/collision.json >"$tmp/v1" 2>&1 && grep -q "valid" 
     grep -q "particles: 2 " "$tmp/v1" && grep -Eq "stable dt estimate: [0-9.e+-]+ s" "$tmp/v1"; then
     ok validate_valid
 else bad validate_valid "$(cat "$tmp/v1")"; fi
+# the contact resolution: reported for polyhedra, with a warning in single precision against the
+# example's walls (64 ulps of ~0.5 m is ~4e-6 m), none in double
+sed 's/"name": "packing",/"name": "packing", "precision": "single",/' examples/packing.json >"$tmp/single.json"
+$POLYDEM validate examples/packing.json >"$tmp/vd" 2>&1
+$POLYDEM validate "$tmp/single.json" >"$tmp/vs" 2>&1
+if grep -q "contacts resolved to about" "$tmp/vd" && ! grep -q "warning" "$tmp/vd" &&
+    grep -q "warning: contact depths below" "$tmp/vs"; then
+    ok validate_contact_resolution
+else bad validate_contact_resolution "$(cat "$tmp/vd" "$tmp/vs")"; fi
 # every error with its JSON path, exit 1
 sed -e 's/"density": 2600/"density": -2600/' -e 's/"friction": 0.35/"frction": 0.35/' \
     examples/collision.json >"$tmp/bad.json"

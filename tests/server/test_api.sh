@@ -185,6 +185,7 @@ check unknown_route_404 "404 not_found" "$code $(jstr code)"
 code=$(req POST /v1/scenarios/validate --data-binary @examples/collision.json)
 check validate_summary "200 True 2 20000" "$code $(jget "$tmp/body" '" ".join(str(x) for x in [d["valid"], d["summary"]["particles"], d["summary"]["steps"]])')"
 check validate_dt_estimates true "$(jget "$tmp/body" 'str(0 < d["summary"]["dt_stable"] <= d["summary"]["dt_rayleigh"] and d["summary"]["memory_bytes"] > 0).lower()')"
+check validate_contact_resolution true "$(jget "$tmp/body" 'str(0 <= d["summary"]["contact_resolution_m"] < 1e-8).lower()')"
 python3 -c '
 import json, sys
 s = json.load(open("examples/collision.json"))

@@ -274,6 +274,39 @@ TEST(every_error_is_reported)
     pd_diags_free(&d);
 }
 
+/*
+ * The contact resolution validate reports: 64 ulps (kernels/overlap.h, OVL_SNAP) of the largest
+ * coordinate in play, here the 2 m floor (a pair of 2 cm cubes spans 4 circumradii, 0.069 m);
+ * spheres alone have none.
+ */
+TEST(contact_resolution_follows_precision_and_walls)
+{
+    const char *fmt =
+        "{\"precision\": \"%s\", \"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+        "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+        "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+        "\"shapes\": {\"c\": %s},"
+        "\"particles\": [{\"shape\": \"c\", \"material\": \"rock\", \"count\": 1, \"size\": 0.02,"
+        " \"region\": {\"min\": [0,0,0.05], \"max\": [0.1,0.1,0.1]}}],"
+        "\"walls\": [{\"name\": \"floor\", \"material\": \"rock\","
+        " \"box\": {\"min\": [-1, -1, -0.1], \"max\": [1, 1, 0]}}]}";
+    const char *prec[2] = {"double", "single"},
+               *shape[2] = {"{\"builtin\": \"cube\"}", "{\"sphere\": {}}"};
+    double eps[2] = {2.220446049250313e-16, 1.1920929e-7};
+    for (int k = 0; k < 4; k++) {
+        char text[2048];
+        pd_diags d;
+        snprintf(text, sizeof text, fmt, prec[k % 2], shape[k / 2]);
+        pd_scenario *s = parse(text, &d);
+        CHECK(s != NULL);
+        if (!s) continue;
+        pd_scenario_summary sum;
+        pd_scenario_summarize(s, &sum);
+        CHECK_REL(k < 2 ? 64 * eps[k % 2] * 2.0 : 0, sum.contact_resolution, 1e-12);
+        pd_scenario_destroy(s);
+    }
+}
+
 TEST(unstable_dt_is_refused_with_the_estimate)
 {
     /* spheres of 1 cm, E = 2e7 Pa, nu = 0.25 (G = 8e6 Pa), rho = 2600, moving at 1 m/s without
@@ -325,5 +358,6 @@ int main(void)
     RUN(every_error_is_reported);
     RUN(empty_scenario_is_invalid_not_out_of_memory);
     RUN(unstable_dt_is_refused_with_the_estimate);
+    RUN(contact_resolution_follows_precision_and_walls);
     return TEST_DONE();
 }
