@@ -205,10 +205,14 @@ export function normalizeStats(s) {
     for (let i = 0; i < m.length; i++) m[i] = Math.hypot(v[3 * i], v[3 * i + 1], v[3 * i + 2]);
     walls[name] = m;
   }
+  // /stats/stage_time: seconds per stage of the step ending at each row (finished jobs only)
+  const stages = {};
+  for (const [name, series] of Object.entries(s.stage_time || {})) stages[name] = flat(series);
   return {
     time: flat(s.time),
     kinetic_energy: flat(s.kinetic_energy),
     contacts: flat(s.contacts),
     walls,
+    stages,
   };
 }

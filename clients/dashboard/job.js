@@ -1,4 +1,4 @@
-// job.js - one job: its state (live over SSE), plots of kinetic energy, contacts and wall forces
+// job.js - one job: its state (live over SSE), plots of kinetic energy, contacts, wall forces and stage times
 // against time from /stats (refreshed while it runs; the progress events fill in until /stats
 // answers), the 3D viewer of any output frame with a time slider and play, and downloads.
 
@@ -101,6 +101,7 @@ function setupPlots() {
   plots.ke = new Plot($('plot-ke'), { ...time, yLabel: 'kinetic energy', yUnit: 'J' });
   plots.contacts = new Plot($('plot-contacts'), { ...time, yLabel: 'contacts' });
   plots.walls = new Plot($('plot-walls'), { ...time, yLabel: 'wall force |F|', yUnit: 'N', legend: 'always' });
+  plots.stages = new Plot($('plot-stages'), { ...time, yLabel: 'time per step', yUnit: 's', legend: 'always' });
   $('ke-log').addEventListener('change', (e) => plots.ke.setLogY(e.target.checked));
 }
 
@@ -124,6 +125,9 @@ async function loadStats() {
       plots.walls.empty = hasWalls && !FINISHED.includes(job.status)
         ? 'wall forces are shown when the job has finished' : 'no walls in this scenario';
       plots.walls.setData(walls.map(([name, y]) => ({ name, x: s.time, y })));
+      plots.stages.empty = FINISHED.includes(job.status)
+        ? 'no stage times in this result' : 'stage times are shown when the job has finished';
+      plots.stages.setData(Object.entries(s.stages).map(([name, y]) => ({ name, x: s.time, y })));
       $('plot-note').textContent = `${count(s.time.length)} stats rows`;
     }
   } catch (e) {

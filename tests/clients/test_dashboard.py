@@ -145,7 +145,8 @@ def main():
             page.wait_for("document.getElementById('plot-note').textContent.includes('stats rows')", 20)
             page.eval("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
             out = []
-            for p in ("ke", "contacts"):  # the first series is drawn in #1f6feb (plot.js)
+            # the first series is drawn in #1f6feb (plot.js); the stages' first is "integrate"
+            for p in ("ke", "contacts", "stages"):
                 n = count_near(shot(page, "#plot-" + p, "plot-" + p), (0x1f, 0x6f, 0xeb))
                 assert n >= 60, "#plot-%s: %d pixels of the series colour, want >= 60" % (p, n)
                 out.append(n)
