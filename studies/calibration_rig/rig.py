@@ -9,7 +9,7 @@ flow down the plane, drop off its free edge and pile up on the plate with free f
 sides. The repose angle comes from a 20-bin height map of the pile's top and front flank (along
 +x, away from the plane) fitted with eq. 6.1 by studies/calibration/repose_fit.c (GSL).
 
-  rig.py phase1 --triangles T --out DIR        writes DIR/rig_T_1.json
+  rig.py phase1 --triangles T [--seed S] --out DIR   writes DIR/rig_T_1.json (rig_T_sS_1.json)
   rig.py phase2 --triangles T --out DIR        DIR/rig_T_1.h5 -> DIR/rig_T_2.json
   rig.py heightmap --triangles T --out DIR     DIR/rig_T_2.h5 -> DIR/rig_T_hmap.txt
   rig.py analyze --out DIR                     fits, repose.csv, repose.png, heightmaps.png, bands
@@ -118,6 +118,12 @@ def base_scenario(a, doors_open):
     }
 
 
+def tag(triangles, seed):
+    """The file name part of one run: rig_T_... for seed 1 (as before seeds were added), rig_T_sS_...
+    for the others."""
+    return "%d" % triangles if seed == 1 else "%d_s%d" % (triangles, seed)
+
+
 def phase1(a):
     os.makedirs(a.out, exist_ok=True)
     tilted_plane_obj(os.path.join(a.out, "plane.obj"))
@@ -132,7 +138,7 @@ def phase1(a):
                        "region": {"min": [HOP_X[0], -W / 2, DOOR_Z],
                                   "max": [HOP_X[1], W / 2, hop_top(a.particles)]},
                        "arrangement": "random", "orientation": "random"}]
-    p = os.path.join(a.out, "rig_%d_1.json" % a.triangles)
+    p = os.path.join(a.out, "rig_%s_1.json" % tag(a.triangles, a.seed))
     study.write_json(p, s)
     v = study.validate(p)
     print("  %d triangles: %d particles, stable dt estimate %s s (dt %g s)"
@@ -141,7 +147,7 @@ def phase1(a):
 
 def phase2(a):
     import h5py
-    with h5py.File(os.path.join(a.out, "rig_%d_1.h5" % a.triangles), "r") as h5:
+    with h5py.File(os.path.join(a.out, "rig_%s_1.h5" % tag(a.triangles, a.seed)), "r") as h5:
         fr = h5["frames"]
         x, q = fr["position"][-1], fr["orientation"][-1]
         v, w = fr["velocity"][-1], fr["angular_velocity"][-1]
@@ -155,7 +161,7 @@ def phase2(a):
     s["particles"] = [{"shape": "rock", "material": "rock", "list": [
         {"position": x[i].tolist(), "orientation": q[i].tolist(), "velocity": v[i].tolist(),
          "angular_velocity": w[i].tolist(), "size": float(size[i])} for i in range(len(size))]}]
-    p = os.path.join(a.out, "rig_%d_2.json" % a.triangles)
+    p = os.path.join(a.out, "rig_%s_2.json" % tag(a.triangles, a.seed))
     study.write_json(p, s)
     study.validate(p)
     print("  %d triangles: phase 2 with %d particles, %.3f kg (Table A.2: 1 kg)"
@@ -170,7 +176,7 @@ def heightmap(a):
     of the one-particle runout layer (150 mm in all). Each bin holds the highest posed vertex of
     the pile's particles that lies in it."""
     import h5py
-    with h5py.File(os.path.join(a.out, "rig_%d_2.h5" % a.triangles), "r") as h5:
+    with h5py.File(os.path.join(a.out, "rig_%s_2.h5" % tag(a.triangles, a.seed)), "r") as h5:
         x, q = h5["frames/position"][-1], h5["frames/orientation"][-1]
         x_prev = h5["frames/position"][-2]  # a tenth of phase 2 earlier: the creep
         t_frames = h5["frames/time"][()]
@@ -215,7 +221,7 @@ def heightmap(a):
             "creep_m": float(np.linalg.norm(x[mapped] - x_prev[mapped], axis=1).max()),
             "creep_s": float(t_frames[-1] - t_frames[-2]),
             "rolling": int((np.linalg.norm(x[pile] - x_prev[pile], axis=1) > a.max_creep).sum())}
-    with open(os.path.join(a.out, "rig_%d_hmap.txt" % a.triangles), "w") as f:
+    with open(os.path.join(a.out, "rig_%s_hmap.txt" % tag(a.triangles, a.seed)), "w") as f:
         f.write("# x_m h_m: %d-bin height map of the pile's top and front flank (rig.py)\n"
                 % NBINS)
         f.write("# meta %s\n" % json.dumps(meta))
@@ -247,7 +253,8 @@ def analyze(a):
     failed = []
     fig, ax = plt.subplots(figsize=(6.5, 4))
     for c in cases:
-        hm = os.path.join(a.out, "rig_%d_hmap.txt" % c["triangles"])
+        c.setdefault("seed", 1)
+        hm = os.path.join(a.out, "rig_%s_hmap.txt" % tag(c["triangles"], c["seed"]))
         d, meta = read_hmap(hm)
         r = subprocess.run([fit_bin, hm], capture_output=True, text=True)
         try:
@@ -262,7 +269,8 @@ def analyze(a):
         rows.append(dict(c, **fit, **meta))
         x0 = meta["top_x_m"]
         p = ax.plot((d[:, 0] - x0) * 1e3, d[:, 1] * 1e3, "o", ms=3,
-                    label="%d triangles: %.1f deg" % (c["triangles"], fit["angle_deg"]))
+                    label="%d triangles, seed %d: %.1f deg" % (c["triangles"], c["seed"],
+                                                                fit["angle_deg"]))
         if math.isfinite(fit["a"]):
             xs = np.linspace(d[0, 0], d[-1, 0], 200)
             ax.plot((xs - x0) * 1e3, 1e3 * fit["c"] / (1 + np.exp(fit["a"] * (xs - fit["b"]))),
@@ -275,10 +283,22 @@ def analyze(a):
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, "heightmaps.png"), dpi=110)
     fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
-    tri = [r["triangles"] for r in rows]
-    ax1.plot(tri, [r["flow_ke_J"] * 1e3 for r in rows], "ko-")
+    # per resolution: the mean and (with more than one seed) the sample standard deviation over
+    # the seeds' runs, as figure 6.10's error bars over its 11 runs
+    tri = sorted(set(r["triangles"] for r in rows))
+    ens = {}
+    for t in tri:
+        ang = np.array([r["angle_deg"] for r in rows if r["triangles"] == t])
+        ke = np.array([r["flow_ke_J"] for r in rows if r["triangles"] == t])
+        ens[t] = {"triangles": t, "runs": len(ang), "angle_mean_deg": float(ang.mean()),
+                  "angle_std_deg": float(ang.std(ddof=1)) if len(ang) > 1 else 0.0,
+                  "flow_ke_mean_J": float(ke.mean()),
+                  "flow_ke_std_J": float(ke.std(ddof=1)) if len(ke) > 1 else 0.0}
+    ax1.errorbar(tri, [ens[t]["flow_ke_mean_J"] * 1e3 for t in tri],
+                 yerr=[ens[t]["flow_ke_std_J"] * 1e3 for t in tri], fmt="ko-", capsize=3)
     ax1.set_ylabel("mean kinetic energy, flow phase (mJ)")
-    ax2.plot(tri, [r["angle_deg"] for r in rows], "ko-")
+    ax2.errorbar(tri, [ens[t]["angle_mean_deg"] for t in tri],
+                 yerr=[ens[t]["angle_std_deg"] for t in tri], fmt="ko-", capsize=3)
     ax2.axhspan(33, 42, color="0.85", label="experimental range (thesis): 33-42 deg")
     ax2.set_ylabel("repose angle (deg)")
     ax2.legend(fontsize=7)
@@ -289,25 +309,37 @@ def analyze(a):
         ax.minorticks_off()
         ax.set_xlabel("triangles per particle (rock)")
         ax.grid(alpha=0.3)
-    fig.suptitle("calibration rig against resolution (fig. 6.10, one run each)", fontsize=9)
+    runs = sorted(set(ens[t]["runs"] for t in tri))
+    fig.suptitle("calibration rig against resolution (fig. 6.10, %s run%s each%s)"
+                 % ("/".join(str(n) for n in runs), "" if runs == [1] else "s",
+                    "" if runs == [1] else ", mean and standard deviation"), fontsize=9)
     fig.tight_layout()
     fig.savefig(os.path.join(a.out, "repose.png"), dpi=110)
-    keys = ["triangles", "n", "pile", "mass_kg", "angle_deg", "a", "b", "c", "rms_m",
+    keys = ["triangles", "seed", "n", "pile", "mass_kg", "angle_deg", "a", "b", "c", "rms_m",
             "top_h_m", "top_x_m", "flow_ke_J", "final_ke_J", "peak_ke_J", "max_speed_m_s",
             "settle_s", "flow_s", "run_s"]
     with open(os.path.join(a.out, "repose.csv"), "w") as f:
         f.write(",".join(keys) + "\n")
         for r in rows:
             f.write(",".join(str(r.get(k, "")) for k in keys) + "\n")
-    study.write_json(os.path.join(a.out, "summary.json"), {"cases": rows})
+    study.write_json(os.path.join(a.out, "summary.json"),
+                     {"cases": rows, "resolutions": [ens[t] for t in tri]})
     b = Bands("calibration_rig")
     for r in rows:
-        print("  %4d triangles: repose angle %.1f deg (a %.4g 1/m, b %.4g m, c %.4g m, rms %.2g "
+        print("  %4d triangles (seed %d): repose angle %.1f deg (a %.4g 1/m, b %.4g m, c %.4g m, rms %.2g "
               "m), %d of %d particles in the pile (%.3f kg), top %.1f mm, flow-phase KE %.3g "
               "mJ, final/peak KE %.2g, run %s s"
-              % (r["triangles"], r["angle_deg"], r["a"], r["b"], r["c"], r["rms_m"], r["pile"],
+              % (r["triangles"], r["seed"], r["angle_deg"], r["a"], r["b"], r["c"], r["rms_m"],
+                 r["pile"],
                  r["n"], r["mass_kg"], 1e3 * r["top_h_m"], 1e3 * r["flow_ke_J"],
                  r["final_ke_J"] / r["peak_ke_J"], r.get("run_s", "?")))
+    for t in tri:
+        if ens[t]["runs"] > 1:
+            print("  %4d triangles, %d runs: repose angle %.1f +- %.1f deg (mean, sample std), "
+                  "flow-phase KE %.3g +- %.2g mJ" % (t, ens[t]["runs"], ens[t]["angle_mean_deg"],
+                                                     ens[t]["angle_std_deg"],
+                                                     1e3 * ens[t]["flow_ke_mean_J"],
+                                                     1e3 * ens[t]["flow_ke_std_J"]))
     for msg in failed:
         print("  " + msg.strip())
     for r in rows:

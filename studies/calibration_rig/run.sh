@@ -27,6 +27,9 @@ case ${1:-} in
 *) echo "usage: $0 [--quick]" >&2; exit 2 ;;
 esac
 PARTICLES=${PARTICLES:-400}
+# SEEDS="1 2 3": several runs per resolution (the particles' sizes, places and orientations
+# drawn anew), reported as mean and standard deviation (figure 6.10's 11 runs)
+SEEDS=${SEEDS:-1}
 DURATION=${DURATION:-1.3} # the piles stop creeping by then (README.md)
 [ -x "$POLYDEM" ] || { echo "error: $POLYDEM not built (run make)" >&2; exit 1; }
 [ -x "$REPOSE_FIT" ] || { echo "error: $REPOSE_FIT not built (make studies builds it)" >&2; exit 1; }
@@ -41,19 +44,25 @@ run() {
     fi
     echo $(($(date +%s) - t0))
 }
-echo "calibration_rig: $PARTICLES particles, phase 2 $DURATION s, triangles $TRIS"
+echo "calibration_rig: $PARTICLES particles, phase 2 $DURATION s, triangles $TRIS, seeds $SEEDS"
 echo '{"cases": [' >"$OUT/cases.json"
 sep=
 for t in $TRIS; do
-    "$PY" "$HERE/rig.py" phase1 --triangles "$t" --particles "$PARTICLES" --out "$OUT"
-    s1=$(run "$OUT/rig_${t}_1.json" "$OUT/rig_${t}_1.h5")
-    "$PY" "$HERE/rig.py" phase2 --triangles "$t" --duration "$DURATION" --out "$OUT"
-    s2=$(run "$OUT/rig_${t}_2.json" "$OUT/rig_${t}_2.h5")
-    echo "  $t triangles: filling $s1 s, flow and pile $s2 s (wall clock)"
-    "$PY" "$HERE/rig.py" heightmap --triangles "$t" --out "$OUT"
-    printf '%s{"triangles": %d, "settle_s": %d, "flow_s": %d, "run_s": %d}\n' "$sep" "$t" \
-        "$s1" "$s2" $((s1 + s2)) >>"$OUT/cases.json"
-    sep=,
+    for seed in $SEEDS; do
+        tag=$t
+        [ "$seed" = 1 ] || tag=${t}_s$seed
+        "$PY" "$HERE/rig.py" phase1 --triangles "$t" --seed "$seed" --particles "$PARTICLES" \
+            --out "$OUT"
+        s1=$(run "$OUT/rig_${tag}_1.json" "$OUT/rig_${tag}_1.h5")
+        "$PY" "$HERE/rig.py" phase2 --triangles "$t" --seed "$seed" --duration "$DURATION" \
+            --out "$OUT"
+        s2=$(run "$OUT/rig_${tag}_2.json" "$OUT/rig_${tag}_2.h5")
+        echo "  $t triangles, seed $seed: filling $s1 s, flow and pile $s2 s (wall clock)"
+        "$PY" "$HERE/rig.py" heightmap --triangles "$t" --seed "$seed" --out "$OUT"
+        printf '%s{"triangles": %d, "seed": %d, "settle_s": %d, "flow_s": %d, "run_s": %d}\n' \
+            "$sep" "$t" "$seed" "$s1" "$s2" $((s1 + s2)) >>"$OUT/cases.json"
+        sep=,
+    done
 done
 echo ']}' >>"$OUT/cases.json"
 "$PY" "$HERE/rig.py" analyze --out "$OUT"
