@@ -179,7 +179,8 @@ void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out)
     /*
      * The overlap's snapping resolution (kernels/overlap.h: OVL_SNAP = 64 ulps of the largest
      * coordinate in play, in a particle's frame): two of the largest polyhedra side by side, or a
-     * wall's farthest vertex from its centroid (wall triangles near a particle are used whole).
+     * wall's extent, the longest side of its box (the wall's triangles near a particle are used
+     * whole, so their far corners count).
      */
     double span = 0;
     int poly = 0;
