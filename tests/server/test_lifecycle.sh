@@ -40,7 +40,10 @@ code=$(req GET "/v1/jobs/$l1/stats")
 check live_stats_while_running "200 true" "$code $(jget "$tmp/body" 'str(d["partial"] and len(d["time"]) >= 1 and len(d["time"]) == len(d["kinetic_energy"])).lower()')"
 code=$(req GET "/v1/jobs/$l1/frames/0")
 check no_frames_while_running "409 result_not_ready" "$code $(jstr code)"
-python3 tests/server/sse.py "$URL/v1/jobs/$l1/events" 60 >"$tmp/l1.sse" 2>&1 &
+# the file exists before the client starts: the background redirection may open it only after
+# the loop below first reads it (which then saw no file, gave up waiting and cancelled early)
+: >"$tmp/l1.sse"
+python3 tests/server/sse.py "$URL/v1/jobs/$l1/events" 60 >>"$tmp/l1.sse" 2>&1 &
 sse_pid=$!
 # cancel once the client has seen two progress events
 i=0
