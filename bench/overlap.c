@@ -126,8 +126,6 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
         memcpy(in[i].tr, s->tr, sizeof s->tr);
         in[i].ca = v3(s->ca[0], s->ca[1], s->ca[2]);
         in[i].cb = v3(s->cb[0], s->cb[1], s->cb[2]);
-        in[i].vol_a = s->vol_a;
-        in[i].vol_b = s->vol_b;
         in[i].flags = flags;
         in[i].iscr = iscr;
         in[i].rscr = rscr;

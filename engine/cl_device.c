@@ -358,8 +358,6 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
         goto done;
     }
     cl_kernel k = dev->k_overlap[dbl];
-    double vold[2] = {s->vol_a, s->vol_b};
-    float volf[2] = {(float)s->vol_a, (float)s->vol_b};
     cl_int args_e = CL_SUCCESS;
     int ai = 0;
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[0]);
@@ -375,8 +373,6 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[4]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &npairs);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->flags);
-    args_e |= clSetKernelArg(k, ai++, rs, dbl ? (void *)&vold[0] : (void *)&volf[0]);
-    args_e |= clSetKernelArg(k, ai++, rs, dbl ? (void *)&vold[1] : (void *)&volf[1]);
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[5]);
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[6]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &cap);

@@ -105,8 +105,6 @@ int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const 
         s->ca_mesh[i] = ma.centroid[i];
         s->xa[i] = pa->x[i];
     }
-    s->vol_a = ma.volume;
-    s->vol_b = mb.volume;
     s->flags = flags;
     return PD_OK;
 }

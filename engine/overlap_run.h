@@ -19,7 +19,6 @@ typedef struct ovl_setup {
     int *vt_a_off, *vt_a, *vt_b_off, *vt_b; /* vertex -> triangle tables (owned) */
     double rot[9], tr[3];                   /* B's frame -> A's frame */
     double ca[3], cb[3];                    /* centroids in A's frame */
-    double vol_a, vol_b;
     int flags;
     /* A's frame -> world: world = ra * (p + ca_mesh) + xa */
     double ra[3][3], ca_mesh[3], xa[3];

@@ -82,8 +82,6 @@ PD_FN void np_setup(const np_shapes *sh, const np_body *a, const np_body *b, int
     in->tr[2] = ra[2] * dx.x + ra[5] * dx.y + ra[8] * dx.z;
     in->ca = v3(0, 0, 0); /* body frames have the centroid at the origin */
     in->cb = v3(in->tr[0], in->tr[1], in->tr[2]);
-    in->vol_a = sh->unit_vol[sa] * a->size * a->size * a->size;
-    in->vol_b = sh->unit_vol[sb] * b->size * b->size * b->size;
     in->flags = flags;
     wb_tree_none(&in->wall);
 }

@@ -11,9 +11,8 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
                             __global const pd_real *vb, __global const int *tb, int nvb, int ntb,
                             __global const int *vt_a_off, __global const int *vt_a,
                             __global const int *vt_b_off, __global const int *vt_b,
-                            __global const pd_real *xf, int npairs, int flags, pd_real vol_a,
-                            pd_real vol_b, __global int *iscr, __global pd_real *rscr, int pts_cap,
-                            __global pd_real *out)
+                            __global const pd_real *xf, int npairs, int flags, __global int *iscr,
+                            __global pd_real *rscr, int pts_cap, __global pd_real *out)
 {
     int g = (int)get_global_id(0);
     if (g >= npairs) return;
@@ -38,8 +37,6 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
         in.tr[i] = x[9 + i];
     in.ca = v3(x[12], x[13], x[14]);
     in.cb = v3(x[15], x[16], x[17]);
-    in.vol_a = vol_a;
-    in.vol_b = vol_b;
     in.flags = flags;
     wb_tree_none(&in.wall);
     in.iscr = iscr + (size_t)g * (size_t)ovl_iscratch_len(nta, ntb, nva, nvb);

@@ -60,8 +60,7 @@ typedef struct ovl_in {
     PD_GLOBAL const int *vt_a_off, *vt_a, *vt_b_off, *vt_b;
     pd_real rot[9]; /* B's frame -> A's frame, row-major: p = rot * v + tr (B's scale in rot) */
     pd_real tr[3];
-    pd_v3 ca, cb;         /* centroids of A and B in A's frame (filter direction, eq. 5.3) */
-    pd_real vol_a, vol_b; /* mesh volumes; set the "no overlap" threshold */
+    pd_v3 ca, cb; /* centroids of A and B in A's frame (filter direction, eq. 5.3) */
     int flags;
     PD_GLOBAL int *iscr;     /* ovl_iscratch_len ints */
     PD_GLOBAL pd_real *rscr; /* ovl_rscratch_len reals */
