@@ -145,11 +145,18 @@ def main():
             page.wait_for("document.getElementById('plot-note').textContent.includes('stats rows')", 20)
             page.eval("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
             out = []
-            # the first series is drawn in #1f6feb (plot.js); the stages' first is "integrate"
-            for p in ("ke", "contacts", "stages"):
+            for p in ("ke", "contacts"):  # the first series is drawn in #1f6feb (plot.js)
                 n = count_near(shot(page, "#plot-" + p, "plot-" + p), (0x1f, 0x6f, 0xeb))
                 assert n >= 60, "#plot-%s: %d pixels of the series colour, want >= 60" % (p, n)
                 out.append(n)
+            # the five stages in plot.js's first five colours: one stage's line alone may lie
+            # along the axis (integrate took 39 pixels in one run), all five together may not
+            png = shot(page, "#plot-stages", "plot-stages")
+            n = sum(count_near(png, c) for c in ((0x1f, 0x6f, 0xeb), (0xd1, 0x24, 0x2f),
+                                                 (0x1a, 0x7f, 0x37), (0x9a, 0x67, 0x00),
+                                                 (0x82, 0x50, 0xdf)))
+            assert n >= 60, "#plot-stages: %d pixels of the stages' colours, want >= 60" % n
+            out.append(n)
             return out
         step("job_page_plots_render", plots)
 
