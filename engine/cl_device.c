@@ -469,16 +469,15 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     ovl_scratch_len(&big, &ilen, &rlen);
     size_t rs = dbl ? sizeof(double) : sizeof(float);
     /* real-valued inputs converted to the device's scalar */
-    const double *src[5] = {x, q, size, t->vert, t->unit_vol};
-    size_t len[5] = {3 * (size_t)nbody, 4 * (size_t)nbody, (size_t)nbody, 3 * (size_t)nv,
-                     (size_t)t->nshape};
-    void *host[5] = {0};
-    cl_mem b[14] = {0};
+    const double *src[4] = {x, q, size, t->vert};
+    size_t len[4] = {3 * (size_t)nbody, 4 * (size_t)nbody, (size_t)nbody, 3 * (size_t)nv};
+    void *host[4] = {0};
+    cl_mem b[13] = {0};
     cl_kernel k = NULL;
     cl_int e = CL_SUCCESS;
     void *hout = malloc(rs * 12 * (size_t)npairs);
     rc = PD_OK;
-    for (int i = 0; i < 5; i++) {
+    for (int i = 0; i < 4; i++) {
         host[i] = malloc(rs * (len[i] ? len[i] : 1));
         if (!host[i])
             rc = PD_ENOMEM;
@@ -506,11 +505,10 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
         b[9] = clCreateBuffer(dev->ctx, ro, sizeof(int) * (nv + t->nshape), (void *)t->vt_off, &e);
     if (e == CL_SUCCESS)
         b[10] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * nt, (void *)t->vt, &e);
-    if (e == CL_SUCCESS) b[11] = clCreateBuffer(dev->ctx, ro, rs * len[4], host[4], &e);
     if (e == CL_SUCCESS)
-        b[12] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);
+        b[11] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);
     if (e == CL_SUCCESS)
-        b[13] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, rs * rlen * npairs, NULL, &e);
+        b[12] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, rs * rlen * npairs, NULL, &e);
     cl_mem bout = NULL;
     if (e == CL_SUCCESS)
         bout = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * 12 * npairs, NULL, &e);
@@ -524,11 +522,11 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     cl_int ae = CL_SUCCESS;
     ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[0]);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &npairs);
-    for (int i = 1; i <= 11; i++)
+    for (int i = 1; i <= 10; i++)
         ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[i]);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &flags);
+    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[11]);
     ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[12]);
-    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[13]);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &il);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &rl);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &cap);
@@ -548,9 +546,9 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     for (size_t i = 0; i < 12 * (size_t)npairs; i++)
         out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
 done:
-    for (int i = 0; i < 14; i++)
+    for (int i = 0; i < 13; i++)
         if (b[i]) clReleaseMemObject(b[i]);
-    for (int i = 0; i < 5; i++)
+    for (int i = 0; i < 4; i++)
         free(host[i]);
     free(hout);
     if (k) clReleaseKernel(k);

@@ -69,7 +69,7 @@ void ovl_setup_pack(const ovl_setup *s, double xf[18]);
  */
 typedef struct np_tables {
     int nshape;
-    const double *vert, *unit_vol;
+    const double *vert;
     const int *tri, *voff, *toff, *vt_off, *vt;
 } np_tables;
 

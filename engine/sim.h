@@ -63,7 +63,7 @@ typedef struct sim {
     /* particles */
     cl_mem L, f, t;
     /* shapes and materials */
-    cl_mem vert, tri, voff, toff, vt_off, vt, unit_vol, kind, radius_ratio, params;
+    cl_mem vert, tri, voff, toff, vt_off, vt, kind, radius_ratio, params;
     cl_mem unit_inertia, density; /* per shape: principal moments for size 1 and density 1;
                                      per material: kg/m^3 */
     /* walls' triangle BVHs (kernels/wall_bvh.h, engine/wall_tree.c) */

@@ -13,8 +13,6 @@
 #include "sim.h"
 #include "wall_tree.h"
 
-static const double PI = 3.14159265358979323846;
-
 static cl_mem mk(sim *m, size_t bytes, int *ok, cl_int *e)
 {
     if (!*ok) return NULL;
@@ -287,11 +285,11 @@ static int upload_shapes(sim *m, pd_error *err)
     const pd_mesh **mesh = calloc((size_t)ns, sizeof *mesh);
     int *voff = calloc((size_t)ns + 1, sizeof(int)), *toff = calloc((size_t)ns + 1, sizeof(int));
     int *kind = calloc((size_t)ns, sizeof(int));
-    double *uvol = calloc((size_t)ns, sizeof(double)), *rr = calloc((size_t)ns, sizeof(double));
+    double *rr = calloc((size_t)ns, sizeof(double));
     double *ui = calloc(3 * (size_t)ns, sizeof(double)); /* walls' stay 0: never integrated */
     double *vert = NULL;
     int *tri = NULL, *vt_off = NULL, *vt = NULL, rc = PD_OK;
-    if (!mesh || !voff || !toff || !kind || !uvol || !rr || !ui) goto oom;
+    if (!mesh || !voff || !toff || !kind || !rr || !ui) goto oom;
     int max_ta = 0, max_va = 0, max_tb = 0, max_vb = 0;
     for (int i = 0; i < ns; i++) {
         if (i < s->nshape) {
@@ -325,16 +323,14 @@ static int upload_shapes(sim *m, pd_error *err)
     for (int i = 0; i < ns; i++) {
         const pd_mesh *me = mesh[i];
         if (kind[i]) {
-            uvol[i] = PI / 6;
             vt_off[voff[i] + i] = 0;
             continue;
         }
-        pd_mass_props mp;
-        pd_mesh_mass_props(me, &mp);
-        uvol[i] = mp.volume;
         double c[3] = {0, 0, 0};
         if (i >= s->nshape) { /* walls: about the centroid */
             int wi = i - s->nshape;
+            pd_mass_props mp;
+            pd_mesh_mass_props(me, &mp);
             memcpy(c, mp.centroid, sizeof c);
             memcpy(m->wall_c0 + 3 * wi, c, sizeof c);
             m->wall_voff[wi + 1] = m->wall_voff[wi] + me->nverts;
@@ -374,7 +370,6 @@ static int upload_shapes(sim *m, pd_error *err)
     m->toff = mk(m, sizeof(int) * ((size_t)ns + 1), &ok, &e);
     m->vt_off = mk(m, sizeof(int) * ((size_t)voff[ns] + ns), &ok, &e);
     m->vt = mk(m, sizeof(int) * 3 * (size_t)toff[ns], &ok, &e);
-    m->unit_vol = mk(m, m->rs * (size_t)ns, &ok, &e);
     m->kind = mk(m, sizeof(int) * (size_t)ns, &ok, &e);
     m->radius_ratio = mk(m, m->rs * (size_t)ns, &ok, &e);
     m->unit_inertia = mk(m, m->rs * 3 * (size_t)ns, &ok, &e);
@@ -388,7 +383,6 @@ static int upload_shapes(sim *m, pd_error *err)
     if (rc == PD_OK) rc = write_ints(m, m->toff, (size_t)ns + 1, toff, err);
     if (rc == PD_OK) rc = write_ints(m, m->vt_off, (size_t)voff[ns] + ns, vt_off, err);
     if (rc == PD_OK) rc = write_ints(m, m->vt, 3 * (size_t)toff[ns], vt, err);
-    if (rc == PD_OK) rc = sim_write(m, m->unit_vol, 0, (size_t)ns, uvol, err);
     if (rc == PD_OK) rc = write_ints(m, m->kind, (size_t)ns, kind, err);
     if (rc == PD_OK) rc = sim_write(m, m->radius_ratio, 0, (size_t)ns, rr, err);
     if (rc == PD_OK) rc = sim_write(m, m->unit_inertia, 0, 3 * (size_t)ns, ui, err);
@@ -400,7 +394,6 @@ done:
     free(voff);
     free(toff);
     free(kind);
-    free(uvol);
     free(ui);
     free(rr);
     free(vert);
@@ -733,7 +726,6 @@ void sim_destroy(sim *m)
                       &m->toff,
                       &m->vt_off,
                       &m->vt,
-                      &m->unit_vol,
                       &m->kind,
                       &m->radius_ratio,
                       &m->params,

@@ -335,9 +335,10 @@ static int contacts(sim *m, pd_error *err)
     e |= ARG(k, a++, m->carry_offset);
     e |= ARG(k, a++, m->carry.spring);
     e |= ARG(k, a++, m->carry.kt);
-    cl_mem body[] = {m->x,      m->q,        m->v,        m->w,    m->size,         m->inv_m,
-                     m->shape,  m->material, m->vert,     m->tri,  m->voff,         m->toff,
-                     m->vt_off, m->vt,       m->unit_vol, m->kind, m->radius_ratio, m->params};
+    cl_mem body[] = {
+        m->x,     m->q,   m->v,    m->w,    m->size,   m->inv_m, m->shape, m->material,
+        m->vert,  m->tri, m->voff, m->toff, m->vt_off, m->vt,    m->kind,  m->radius_ratio,
+        m->params};
     for (size_t i = 0; i < sizeof body / sizeof body[0]; i++)
         e |= ARG(k, a++, body[i]);
     e |= ARG(k, a++, m->nmat);

@@ -41,13 +41,12 @@ __kernel void contact_forces(
     __global const pd_real *inv_m, __global const int *shape, __global const int *material,
     __global const pd_real *vert, __global const int *tri, __global const int *voff,
     __global const int *toff, __global const int *vt_off, __global const int *vt,
-    __global const pd_real *unit_vol, __global const int *kind,
-    __global const pd_real *radius_ratio, __global const pd_real *params, int nmat, int nparticles,
-    pd_real dt, __global const pd_real *wnode_box, __global const int *wnode_kid,
-    __global const int *wnode_off, __global const int *wtri_order, int wall_cap, int nwall,
-    __global int *status, __global int *iscr, __global pd_real *rscr, int ilen, int rlen,
-    int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap, pd_real list_life,
-    __global pd_real *force, __global pd_real *point, __global pd_real *spring,
+    __global const int *kind, __global const pd_real *radius_ratio, __global const pd_real *params,
+    int nmat, int nparticles, pd_real dt, __global const pd_real *wnode_box,
+    __global const int *wnode_kid, __global const int *wnode_off, __global const int *wtri_order,
+    int wall_cap, int nwall, __global int *status, __global int *iscr, __global pd_real *rscr,
+    int ilen, int rlen, int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap,
+    pd_real list_life, __global pd_real *force, __global pd_real *point, __global pd_real *spring,
     __global pd_real *kt, __global float *info)
 {
     int g = (int)get_global_id(0);
@@ -67,7 +66,6 @@ __kernel void contact_forces(
     wd.sh.toff = toff;
     wd.sh.vt_off = vt_off;
     wd.sh.vt = vt;
-    wd.sh.unit_vol = unit_vol;
     wd.kind = kind;
     wd.radius_ratio = radius_ratio;
     wd.params = params;

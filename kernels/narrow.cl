@@ -13,9 +13,9 @@ __kernel void narrow_phase(__global const int *pairs, int npairs, __global const
                            __global const int *shape, __global const pd_real *vert,
                            __global const int *tri, __global const int *voff,
                            __global const int *toff, __global const int *vt_off,
-                           __global const int *vt, __global const pd_real *unit_vol, int flags,
-                           __global int *iscr, __global pd_real *rscr, int ilen, int rlen,
-                           int pts_cap, __global pd_real *out)
+                           __global const int *vt, int flags, __global int *iscr,
+                           __global pd_real *rscr, int ilen, int rlen, int pts_cap,
+                           __global pd_real *out)
 {
     int g = (int)get_global_id(0);
     if (g >= npairs) return;
@@ -26,7 +26,6 @@ __kernel void narrow_phase(__global const int *pairs, int npairs, __global const
     sh.toff = toff;
     sh.vt_off = vt_off;
     sh.vt = vt;
-    sh.unit_vol = unit_vol;
     np_body b[2];
     for (int k = 0; k < 2; k++) {
         int i = pairs[2 * g + k];

@@ -6,7 +6,7 @@
  *
  * Shapes are concatenated: shape s has vertices vert[3 voff[s] ..], triangles tri[3 toff[s] ..]
  * with indices local to the shape, the vertex -> triangle table vt_off[voff[s] + s ..] (nv + 1
- * entries, local) over vt[3 toff[s] ..], and unit_vol[s] its volume at size 1.
+ * entries, local) over vt[3 toff[s] ..].
  */
 #ifndef PD_NARROW_PHASE_H
 #define PD_NARROW_PHASE_H
@@ -16,7 +16,6 @@
 typedef struct np_shapes {
     PD_GLOBAL const pd_real *vert;
     PD_GLOBAL const int *tri, *voff, *toff, *vt_off, *vt;
-    PD_GLOBAL const pd_real *unit_vol;
 } np_shapes;
 
 /* Pose of one particle: position (m), orientation [w, x, y, z] (unit), size (m), shape index. */

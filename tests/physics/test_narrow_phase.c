@@ -23,7 +23,7 @@ enum { NSHAPE = 3, NBODY = 24 };
 typedef struct shape_set {
     pd_mesh *m[NSHAPE];
     int voff[NSHAPE + 1], toff[NSHAPE + 1];
-    double *vert, unit_vol[NSHAPE], radius[NSHAPE]; /* radius: circumradius at size 1 */
+    double *vert, radius[NSHAPE]; /* radius: circumradius at size 1 */
     int *tri, *vt_off, *vt;
     np_shapes sh;
 } shape_set;
@@ -61,9 +61,6 @@ static int shapes_build(shape_set *t)
     for (int s = 0; s < NSHAPE; s++) {
         memcpy(vert + 3 * voff[s], m[s]->verts, sizeof(double) * 3 * m[s]->nverts);
         memcpy(tri + 3 * toff[s], m[s]->tris, sizeof(int) * 3 * m[s]->ntris);
-        pd_mass_props mp;
-        pd_mesh_mass_props(m[s], &mp);
-        t->unit_vol[s] = mp.volume;
         t->radius[s] = 0;
         for (int v = 0; v < m[s]->nverts; v++) {
             const double *x = m[s]->verts + 3 * v;
@@ -83,7 +80,7 @@ static int shapes_build(shape_set *t)
             }
         free(fill);
     }
-    np_shapes sh = {vert, tri, voff, toff, vt_off, vt, t->unit_vol};
+    np_shapes sh = {vert, tri, voff, toff, vt_off, vt};
     t->sh = sh;
     return 0;
 }
@@ -94,7 +91,7 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
     if (shapes_build(&set)) return;
     pd_mesh **m = set.m;
     int *voff = set.voff, *toff = set.toff;
-    double *vert = set.vert, *unit_vol = set.unit_vol;
+    double *vert = set.vert;
     int *tri = set.tri, *vt_off = set.vt_off, *vt = set.vt;
     np_shapes sh = set.sh;
     np_body b[NBODY];
@@ -179,7 +176,7 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
         size[i] = b[i].size;
         shape[i] = b[i].shape;
     }
-    np_tables tabs = {NSHAPE, vert, unit_vol, tri, voff, toff, vt_off, vt};
+    np_tables tabs = {NSHAPE, vert, tri, voff, toff, vt_off, vt};
     if (pd_device_open(-1, &dev, &err) != PD_OK ||
         np_run_cl(dev, &tabs, x, q, size, shape, NBODY, pairs, npairs, 1, dout, &err) != PD_OK) {
         TEST_FAILF("opencl narrow phase: %s", err.msg);
