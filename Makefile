@@ -67,7 +67,7 @@ $(BUILD)/bench/%: bench/%.c $(BUILD)/libpolydem.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
 
-check: $(BUILD)/polydem $(UNIT_BIN)
+check: $(BUILD)/polydem $(UNIT_BIN) $(BENCH_BIN)
 	@BUILD=$(BUILD) sh tests/run.sh $(UNIT_BIN)
 
 bench: $(BUILD)/polydem $(BENCH_BIN)

@@ -421,6 +421,7 @@ PD_FN void ovl_miss(ovl_out *o, const ovl_ctx *c)
     o->volume = PD_R(0);
     o->centroid = o->normal = v3(0, 0, 0);
     o->depth = PD_R(0);
+    o->area = PD_R(0);
 }
 
 /* Writes o as the kernels' 12-real result record: hit, degenerate, kept_a, kept_b, volume,
@@ -731,6 +732,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
      * in exact arithmetic; faces shared by both cancel). Coincident shapes have no direction at
      * all: fall back to the centre line, then to +z. */
     pd_real sn = v3_norm(sdiff);
+    o->area = PD_R(0.5) * sn;
     if (sn > PD_R(1000) * PD_EPS * smag)
         o->normal = v3_scale(sdiff, PD_R(1) / sn);
     else

@@ -78,6 +78,9 @@ typedef struct ovl_out {
     pd_v3 centroid; /* centre of mass of the overlap, A's frame */
     pd_v3 normal;   /* unit, from A into B (eq. 4.19), A's frame */
     pd_real depth;  /* extent of the overlap along normal */
+    /* half the norm of eq. 4.19's vector (A's faces inside B minus B's inside A): the contact
+     * area of a thin overlap; a host diagnostic (bench/contacts), not in the kernels' record */
+    pd_real area;
 } ovl_out;
 
 PD_FN int ovl_iscratch_len(int nta, int ntb, int nva, int nvb)

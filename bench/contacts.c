@@ -1,0 +1,427 @@
+/*
+ * bench/contacts.c - the contacts of a saved state, pair by pair, on the host: what a real bed's
+ * overlaps cost, how single precision sees them, and how far each pair's depth is from the
+ * thickness of its overlap.
+ *
+ * Reads one frame of a polydem result (HDF5: /shapes, /particles, /frames), takes every pair of
+ * polyhedral particles whose circumspheres meet, and runs the overlap (kernels/overlap.h) of each
+ * in double precision (timed over --reps passes, touching pairs and misses apart) and in single.
+ * Walls and analytic spheres are left out.
+ *
+ * The depth of section 4.2 is the extent of the whole overlap along the normal. When a pair of
+ * non-convex particles touches in several separate places (thesis section 5.4: they are one
+ * contact), that extent spans the places, not the thickness of any. rho = depth * area / volume,
+ * with area half the norm of eq. 4.19's vector, tells them apart: a thin slab has rho = 1, a
+ * wedge 2, a cone or a cap about 3; far above that, the depth is mostly distance between places.
+ * The force of eq. 4.16 goes as sqrt(V depth), so the report gives the share of sum sqrt(V depth)
+ * carried by pairs with rho > 5.
+ *
+ * --list prints each touching pair: particles, volume (m^3), depth (m), area (m^2), rho, and the
+ * single-precision volume (0: missed).
+ *
+ * usage: build/bench/contacts RESULT.h5 [--frame K] [--reps N] [--list]   (K: default the last)
+ */
+#include <hdf5.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#define PD_DOUBLE 1
+#include "overlap.h"
+#include "overlap_run.h"
+#include "polydem.h"
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return ts.tv_sec + 1e-9 * ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+/* The q-quantile of sorted v[0..n). */
+static double quantile(const double *v, int n, double q)
+{
+    return n ? v[(int)(q * (n - 1) + 0.5)] : 0;
+}
+
+/* Reads dataset `path` as doubles or ints (mtype) into a new buffer; dims[] gets its extent. */
+static void *read_all(hid_t f, const char *path, hid_t mtype, size_t esize, hsize_t dims[3],
+                      int *rank)
+{
+    hid_t d = H5Dopen2(f, path, H5P_DEFAULT);
+    if (d < 0) return NULL;
+    hid_t sp = H5Dget_space(d);
+    *rank = sp >= 0 ? H5Sget_simple_extent_ndims(sp) : -1;
+    void *buf = NULL;
+    if (*rank >= 1 && *rank <= 3 && H5Sget_simple_extent_dims(sp, dims, NULL) >= 0) {
+        size_t n = 1;
+        for (int k = 0; k < *rank; k++)
+            n *= dims[k];
+        buf = malloc(esize * (n ? n : 1));
+        if (buf && H5Dread(d, mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, buf) < 0) {
+            free(buf);
+            buf = NULL;
+        }
+    }
+    if (sp >= 0) H5Sclose(sp);
+    H5Dclose(d);
+    return buf;
+}
+
+/* Reads row `frame` (negative: the last) of /frames/<name>, width w, into out (n x w doubles). */
+static int read_frame(hid_t f, const char *name, int *frame, int n, int w, double *out)
+{
+    char path[64];
+    snprintf(path, sizeof path, "/frames/%s", name);
+    hid_t d = H5Dopen2(f, path, H5P_DEFAULT);
+    if (d < 0) return -1;
+    hid_t sp = H5Dget_space(d);
+    hsize_t dims[3];
+    int ok = sp >= 0 && H5Sget_simple_extent_ndims(sp) == 3 &&
+             H5Sget_simple_extent_dims(sp, dims, NULL) >= 0 && dims[1] == (hsize_t)n &&
+             dims[2] == (hsize_t)w && dims[0] > 0;
+    if (ok && *frame < 0) *frame = (int)dims[0] - 1;
+    ok = ok && (hsize_t)*frame < dims[0];
+    hsize_t start[3] = {(hsize_t)(ok ? *frame : 0), 0, 0}, count[3] = {1, (hsize_t)n, (hsize_t)w};
+    hid_t mem = ok ? H5Screate_simple(3, count, NULL) : -1;
+    ok = ok && mem >= 0 && H5Sselect_hyperslab(sp, H5S_SELECT_SET, start, NULL, count, NULL) >= 0 &&
+         H5Dread(d, H5T_NATIVE_DOUBLE, mem, sp, H5P_DEFAULT, out) >= 0;
+    if (mem >= 0) H5Sclose(mem);
+    if (sp >= 0) H5Sclose(sp);
+    H5Dclose(d);
+    return ok ? 0 : -1;
+}
+
+/* A shape of the file: its mesh at size 1, or NULL for an analytic sphere. */
+typedef struct {
+    char name[128];
+    double *v;
+    int *t, nv, nt, sphere;
+    double radius; /* circumradius about the body origin at size 1 */
+} shape;
+
+static int read_shape(hid_t f, int i, shape *s)
+{
+    hid_t g = H5Gopen2(f, "/shapes", H5P_DEFAULT);
+    if (g < 0) return -1;
+    ssize_t len = H5Lget_name_by_idx(g, ".", H5_INDEX_CRT_ORDER, H5_ITER_INC, (hsize_t)i, s->name,
+                                     sizeof s->name, H5P_DEFAULT);
+    H5Gclose(g);
+    if (len <= 0 || len >= (ssize_t)sizeof s->name) return -1;
+    char path[200];
+    hsize_t dims[3];
+    int rank;
+    snprintf(path, sizeof path, "/shapes/%s/vertices", s->name);
+    s->v = read_all(f, path, H5T_NATIVE_DOUBLE, sizeof(double), dims, &rank);
+    if (!s->v || rank != 2 || dims[1] != 3) return -1;
+    s->nv = (int)dims[0];
+    snprintf(path, sizeof path, "/shapes/%s/triangles", s->name);
+    s->t = read_all(f, path, H5T_NATIVE_INT, sizeof(int), dims, &rank);
+    if (!s->t || rank != 2 || dims[1] != 3) return -1;
+    s->nt = (int)dims[0];
+    /* the kind attribute names analytic spheres (their mesh is for viewing only) */
+    char kind[32] = "";
+    snprintf(path, sizeof path, "/shapes/%s", s->name);
+    hid_t a = H5Aopen_by_name(f, path, "kind", H5P_DEFAULT, H5P_DEFAULT);
+    if (a >= 0) {
+        hid_t ft = H5Aget_type(a);
+        hid_t mt = H5Tcopy(H5T_C_S1);
+        if (H5Tis_variable_str(ft) > 0) {
+            char *str = NULL;
+            H5Tset_size(mt, H5T_VARIABLE);
+            if (H5Aread(a, mt, &str) >= 0 && str) {
+                snprintf(kind, sizeof kind, "%s", str);
+                H5free_memory(str);
+            }
+        } else {
+            H5Tset_size(mt, sizeof kind - 1);
+            H5Aread(a, mt, kind);
+        }
+        H5Tclose(mt);
+        H5Tclose(ft);
+        H5Aclose(a);
+    }
+    s->sphere = strcmp(kind, "sphere") == 0;
+    s->radius = 0;
+    for (int k = 0; k < s->nv; k++) {
+        const double *x = s->v + 3 * k;
+        s->radius = fmax(s->radius, sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]));
+    }
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    const char *path = NULL;
+    int frame = -1, reps = 20, list = 0;
+    for (int i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "--frame") && i + 1 < argc)
+            frame = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--reps") && i + 1 < argc)
+            reps = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--list"))
+            list = 1;
+        else if (argv[i][0] != '-' && !path)
+            path = argv[i];
+        else {
+            fprintf(stderr, "usage: %s RESULT.h5 [--frame K] [--reps N] [--list]\n", argv[0]);
+            return 2;
+        }
+    }
+    if (!path || reps < 1) {
+        fprintf(stderr, "usage: %s RESULT.h5 [--frame K] [--reps N] [--list]\n", argv[0]);
+        return 2;
+    }
+    H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f < 0) {
+        fprintf(stderr, "contacts: %s: not an HDF5 file that can be opened\n", path);
+        return 1;
+    }
+    hsize_t dims[3];
+    int rank, ns = 0;
+    int *pshape = read_all(f, "/particles/shape", H5T_NATIVE_INT, sizeof(int), dims, &rank);
+    int n = pshape && rank == 1 ? (int)dims[0] : 0;
+    double *psize = read_all(f, "/particles/size", H5T_NATIVE_DOUBLE, sizeof(double), dims, &rank);
+    if (!pshape || !psize || rank != 1 || (int)dims[0] != n || n < 2) {
+        fprintf(stderr, "contacts: %s: no /particles/shape and /particles/size of 2 or more\n",
+                path);
+        return 1;
+    }
+    shape sh[64];
+    memset(sh, 0, sizeof sh);
+    for (int i = 0; i < n; i++)
+        ns = pshape[i] + 1 > ns ? pshape[i] + 1 : ns;
+    if (ns > 64) {
+        fprintf(stderr, "contacts: %s: more than 64 shapes\n", path);
+        return 1;
+    }
+    for (int s = 0; s < ns; s++)
+        if (read_shape(f, s, &sh[s]) < 0) {
+            fprintf(stderr, "contacts: %s: cannot read shape %d under /shapes\n", path, s);
+            return 1;
+        }
+    double *x = malloc(sizeof(double) * 3 * n), *q = malloc(sizeof(double) * 4 * n);
+    int fr = frame;
+    if (!x || !q || read_frame(f, "position", &fr, n, 3, x) < 0 ||
+        read_frame(f, "orientation", &fr, n, 4, q) < 0) {
+        fprintf(stderr,
+                "contacts: %s: frame %d of /frames/position and /frames/orientation not found "
+                "(both fields must be in the output)\n",
+                path, frame);
+        return 1;
+    }
+    H5Fclose(f);
+
+    /* each particle's mesh at its size, in its body frame */
+    pd_mesh **m = calloc((size_t)n, sizeof *m);
+    pd_error err = {0};
+    for (int i = 0; i < n && m; i++) {
+        const shape *s = &sh[pshape[i]];
+        if (s->sphere) continue;
+        double *v = malloc(sizeof(double) * 3 * s->nv);
+        for (int k = 0; v && k < 3 * s->nv; k++)
+            v[k] = s->v[k] * psize[i];
+        if (!v || pd_mesh_from_arrays(v, s->nv, s->t, s->nt, s->name, &m[i], &err) != PD_OK) {
+            fprintf(stderr, "contacts: %s\n", v ? err.msg : "out of memory");
+            return 1;
+        }
+        free(v);
+    }
+
+    /* candidate pairs: circumspheres meet */
+    int cap = 1024, np = 0;
+    ovl_setup *su = malloc(sizeof *su * cap);
+    int *pair = malloc(sizeof(int) * 2 * cap); /* the particles of each */
+    for (int i = 0; i < n; i++)
+        for (int j = i + 1; j < n && m[i]; j++) {
+            if (!m[j]) continue;
+            double d2 = 0, r = sh[pshape[i]].radius * psize[i] + sh[pshape[j]].radius * psize[j];
+            for (int k = 0; k < 3; k++)
+                d2 += (x[3 * i + k] - x[3 * j + k]) * (x[3 * i + k] - x[3 * j + k]);
+            if (d2 > r * r) continue;
+            if (np == cap) {
+                cap *= 2;
+                su = realloc(su, sizeof *su * cap);
+                pair = realloc(pair, sizeof(int) * 2 * cap);
+            }
+            pd_pose pa, pb;
+            memcpy(pa.x, x + 3 * i, sizeof pa.x);
+            memcpy(pa.q, q + 4 * i, sizeof pa.q);
+            memcpy(pb.x, x + 3 * j, sizeof pb.x);
+            memcpy(pb.q, q + 4 * j, sizeof pb.q);
+            if (!su || !pair || ovl_setup_make(m[i], &pa, m[j], &pb, 0, &su[np], &err) != PD_OK) {
+                fprintf(stderr, "contacts: pair %d %d: %s\n", i, j,
+                        su && pair ? err.msg : "out of memory");
+                return 1;
+            }
+            pair[2 * np] = i;
+            pair[2 * np + 1] = j;
+            np++;
+        }
+    if (np == 0) {
+        printf("contacts: no two polyhedral particles within reach in frame %d\n", fr);
+        return 0;
+    }
+
+    /* double precision: the kernel's code with preallocated scratch, as bench/overlap */
+    int mv = 0, mt = 0;
+    for (int s = 0; s < ns; s++) {
+        mv = sh[s].nv > mv ? sh[s].nv : mv;
+        mt = sh[s].nt > mt ? sh[s].nt : mt;
+    }
+    int pc = ovl_pts_cap(mt, mt);
+    int *iscr = malloc(sizeof(int) * ovl_iscratch_len(mt, mt, mv, mv));
+    double *rscr = malloc(sizeof(double) * ovl_rscratch_len(mv, mv, mt, pc));
+    ovl_in *in = calloc((size_t)np, sizeof *in);
+    ovl_out *out = calloc((size_t)np, sizeof *out);
+    double *rho = malloc(sizeof(double) * np), *verr = malloc(sizeof(double) * np),
+           *nerr = malloc(sizeof(double) * np), *missed = malloc(sizeof(double) * np);
+    if (!iscr || !rscr || !in || !out || !rho || !verr || !nerr || !missed) {
+        fprintf(stderr, "contacts: out of memory\n");
+        return 1;
+    }
+    for (int p = 0; p < np; p++) {
+        const ovl_setup *s = &su[p];
+        in[p].va = s->va;
+        in[p].sa = 1;
+        in[p].ta = s->ta;
+        in[p].nva = s->nva;
+        in[p].nta = s->nta;
+        in[p].vb = s->vb;
+        in[p].tb = s->tb;
+        in[p].nvb = s->nvb;
+        in[p].ntb = s->ntb;
+        in[p].vt_a_off = s->vt_a_off;
+        in[p].vt_a = s->vt_a;
+        in[p].vt_b_off = s->vt_b_off;
+        in[p].vt_b = s->vt_b;
+        memcpy(in[p].rot, s->rot, sizeof s->rot);
+        memcpy(in[p].tr, s->tr, sizeof s->tr);
+        in[p].ca = v3(s->ca[0], s->ca[1], s->ca[2]);
+        in[p].cb = v3(s->cb[0], s->cb[1], s->cb[2]);
+        in[p].flags = 0;
+        wb_tree_none(&in[p].wall);
+        in[p].iscr = iscr;
+        in[p].rscr = rscr;
+        in[p].pts_cap = pc;
+        ovl_compute(&in[p], &out[p]);
+    }
+    double t_hit = 0, t_miss = 0, sink = 0;
+    int nh = 0, ndeg = 0;
+    for (int p = 0; p < np; p++) {
+        nh += out[p].hit;
+        ndeg += out[p].hit && out[p].degenerate;
+    }
+    for (int cls = 1; cls >= 0; cls--) { /* touching pairs first, then misses */
+        double t0 = now();
+        for (int r = 0; r < reps; r++)
+            for (int p = 0; p < np; p++) {
+                if (out[p].hit != cls) continue;
+                ovl_out o;
+                ovl_compute(&in[p], &o);
+                sink += o.volume;
+            }
+        if (cls)
+            t_hit = now() - t0;
+        else
+            t_miss = now() - t0;
+    }
+
+    /* depth against the overlap's thickness, and single precision against double */
+    int nr = 0, nbig = 0, nboth = 0, nmiss = 0, nextra = 0;
+    double force = 0, force_big = 0;
+    for (int p = 0; p < np; p++) {
+        ovl_result s32;
+        if (ovl_run_f32(&su[p], &s32) != PD_OK) {
+            fprintf(stderr, "contacts: out of memory\n");
+            return 1;
+        }
+        const ovl_out *o = &out[p];
+        if (!o->hit) {
+            nextra += s32.hit;
+            continue;
+        }
+        double r = o->depth * o->area / o->volume, fv = sqrt(o->volume * o->depth);
+        if (list)
+            printf("pair %d %d: volume %.6g m^3, depth %.6g m, area %.6g m^2, rho %.4g, single "
+                   "volume %.6g m^3\n",
+                   pair[2 * p], pair[2 * p + 1], o->volume, o->depth, o->area, r,
+                   s32.hit ? s32.volume : 0);
+        rho[nr++] = r;
+        force += fv;
+        if (r > 5) {
+            nbig++;
+            force_big += fv;
+        }
+        if (!s32.hit) {
+            missed[nmiss++] = o->volume;
+            continue;
+        }
+        verr[nboth] = fabs(s32.volume - o->volume) / o->volume;
+        double c =
+            s32.normal[0] * o->normal.x + s32.normal[1] * o->normal.y + s32.normal[2] * o->normal.z;
+        nerr[nboth++] = acos(fmin(1, c)) * 180 / 3.14159265358979323846;
+    }
+    qsort(rho, nr, sizeof *rho, cmp_double);
+    qsort(verr, nboth, sizeof *verr, cmp_double);
+    qsort(nerr, nboth, sizeof *nerr, cmp_double);
+    qsort(missed, nmiss, sizeof *missed, cmp_double);
+
+    printf("# %s, frame %d: %d particles, %d pairs of polyhedra whose circumspheres meet\n", path,
+           fr, n, np);
+    printf("touching (double precision): %d (%d degenerate, taking two passes)\n", nh, ndeg);
+    printf("host, one core, double: %.0f ns per touching pair, %.0f ns per miss (%d passes)%s\n",
+           nh ? 1e9 * t_hit / ((double)reps * nh) : 0,
+           np > nh ? 1e9 * t_miss / ((double)reps * (np - nh)) : 0, reps, sink < 0 ? " " : "");
+    printf("rho = depth x area / volume (1 slab, 2 wedge, ~3 cap): median %.3g, 90th %.3g, 99th "
+           "%.3g, max %.3g\n",
+           quantile(rho, nr, 0.5), quantile(rho, nr, 0.9), quantile(rho, nr, 0.99),
+           nr ? rho[nr - 1] : 0);
+    printf("pairs with rho > 5: %d of %d, carrying %.1f %% of sum sqrt(V depth) (eq. 4.16's force "
+           "goes as sqrt(V depth))\n",
+           nbig, nr, force > 0 ? 100 * force_big / force : 0);
+    printf("single precision: %d of the %d touching pairs found, %d missed", nboth, nh, nmiss);
+    if (nmiss)
+        printf(" (volumes %.2g to %.2g m^3, median %.2g)", missed[0], missed[nmiss - 1],
+               quantile(missed, nmiss, 0.5));
+    printf(", %d touching in single only\n", nextra);
+    printf("single against double, volume: median %.2g, 90th %.2g, 99th %.2g, max %.2g relative; "
+           "normal: median %.2g, 99th %.2g, max %.2g deg\n",
+           quantile(verr, nboth, 0.5), quantile(verr, nboth, 0.9), quantile(verr, nboth, 0.99),
+           nboth ? verr[nboth - 1] : 0, quantile(nerr, nboth, 0.5), quantile(nerr, nboth, 0.99),
+           nboth ? nerr[nboth - 1] : 0);
+
+    for (int p = 0; p < np; p++)
+        ovl_setup_free(&su[p]);
+    for (int i = 0; i < n; i++)
+        if (m[i]) pd_mesh_destroy(m[i]);
+    for (int s = 0; s < ns; s++) {
+        free(sh[s].v);
+        free(sh[s].t);
+    }
+    free(m);
+    free(su);
+    free(pair);
+    free(in);
+    free(out);
+    free(iscr);
+    free(rscr);
+    free(rho);
+    free(verr);
+    free(nerr);
+    free(missed);
+    free(x);
+    free(q);
+    free(pshape);
+    free(psize);
+    return 0;
+}

@@ -1,0 +1,63 @@
+#!/bin/sh
+# test_bench.sh - bench/contacts (the pairs of a saved state through the overlap, on the host):
+# two analytic contacts read back from a result file, and bad input.
+. tests/cli/lib.sh
+CONTACTS=${POLYDEM%/polydem}/bench/contacts
+
+# Two cube pairs at t = 0 (size 0.02 m: side s = 0.02 (pi/6)^(1/3) = 0.0161199 m), pressed
+# h = 1e-6 m into each other: face on face, a slab (V = s^2 h, depth h, area s^2, rho 1); and the
+# second cube turned 45 deg about z, its edge in the first's face, a wedge (V = h^2 s, depth h,
+# area 2 h s, rho 2). A common velocity gives the run an energy budget for the contact forces.
+cat >"$tmp/pairs.json" <<'JSON'
+{"name": "pairs", "time": {"dt": 1e-6, "duration": 2e-6, "output_interval": 1e-6},
+ "gravity": [0, 0, 0],
+ "materials": {"m": {"density": 2500, "youngs_modulus": 1e5, "poisson_ratio": 0.25}},
+ "interactions": [{"between": ["m", "m"], "friction": 0.3, "damping": 0.2}],
+ "shapes": {"c": {"builtin": "cube"}},
+ "particles": [{"shape": "c", "material": "m", "list": [
+   {"position": [0, 0, 0], "velocity": [0, 0, 1], "size": 0.02},
+   {"position": [0.016118919540164693, 0, 0], "velocity": [0, 0, 1], "size": 0.02},
+   {"position": [0, 0.1, 0], "velocity": [0, 0, 1], "size": 0.02},
+   {"position": [0.019457464189114336, 0.1, 0], "velocity": [0, 0, 1], "size": 0.02,
+    "orientation": [0.9238795325112867, 0, 0, 0.3826834323650898]}]}],
+ "output": {"fields": ["position", "orientation"]}}
+JSON
+if ! $POLYDEM run "$tmp/pairs.json" -o "$tmp/pairs.h5" --quiet 2>"$tmp/err"; then
+    bad pairs_run "$(cat "$tmp/err")"
+fi
+"$CONTACTS" "$tmp/pairs.h5" --frame 0 --reps 2 --list >"$tmp/out" 2>"$tmp/err"
+rc=$?
+# the same numbers from the formulas above, and what the report reads back (%.6g; rho %.4g)
+check_pair() { # NAME PAIR VOLUME DEPTH AREA RHO
+    line=$(grep "^pair $2:" "$tmp/out")
+    # double: the printed 6 digits (1e-5 relative); single: 1 % (its resolution here is 64 ulps
+    # of 0.02 m, 1.5e-7 m of the 1e-6 m depth; measured 1e-3)
+    awk -v l="$line" -v v="$3" -v d="$4" -v a="$5" -v r="$6" '
+        function near(x, y, tol) { return x / y - 1 < tol && 1 - x / y < tol }
+        BEGIN {
+        n = split(l, f, " ");
+        # fields: pair i j: volume V m^3, depth D m, area A m^2, rho R, single volume S m^3
+        V = f[5] + 0; D = f[8] + 0; A = f[11] + 0; R = f[14] + 0; S = f[17] + 0;
+        ok = n >= 18 && near(V, v, 1e-5) && near(D, d, 1e-5) && near(A, a, 1e-5) &&
+             near(R, r, 1e-3) && near(S, v, 1e-2);
+        exit ok ? 0 : 1 }' && ok "$1" || bad "$1" "expected V $3, depth $4, area $5, rho $6: '$line'"
+}
+if [ "$rc" -ne 0 ]; then
+    bad contacts_runs "exit $rc: $(cat "$tmp/err")"
+else
+    ok contacts_runs
+    check_pair slab_rho_1 "0 1" 2.598518e-10 1e-6 2.598518e-04 1
+    check_pair wedge_rho_2 "2 3" 1.611992e-14 1e-6 3.223984e-08 2
+    if grep -q "^touching (double precision): 2 (2 degenerate" "$tmp/out" &&
+        grep -q "^single precision: 2 of the 2 touching pairs found, 0 missed" "$tmp/out"; then
+        ok contacts_summary
+    else bad contacts_summary "$(cat "$tmp/out")"; fi
+fi
+
+expect_fail contacts_no_args 2 "usage" -- "$CONTACTS"
+expect_fail contacts_bad_option 2 "usage" -- "$CONTACTS" "$tmp/pairs.h5" --bogus
+expect_fail contacts_missing_file 1 "nope.h5: not an HDF5 file" -- "$CONTACTS" "$tmp/nope.h5"
+expect_fail contacts_json_not_h5 1 "pairs.json: not an HDF5 file" -- "$CONTACTS" "$tmp/pairs.json"
+expect_fail contacts_frame_out_of_range 1 "frame 99 of /frames/position" -- \
+    "$CONTACTS" "$tmp/pairs.h5" --frame 99
+done_tests
