@@ -290,29 +290,7 @@ int main(int argc, char **argv)
         return 1;
     }
     for (int p = 0; p < np; p++) {
-        const ovl_setup *s = &su[p];
-        in[p].va = s->va;
-        in[p].sa = 1;
-        in[p].ta = s->ta;
-        in[p].nva = s->nva;
-        in[p].nta = s->nta;
-        in[p].vb = s->vb;
-        in[p].tb = s->tb;
-        in[p].nvb = s->nvb;
-        in[p].ntb = s->ntb;
-        in[p].vt_a_off = s->vt_a_off;
-        in[p].vt_a = s->vt_a;
-        in[p].vt_b_off = s->vt_b_off;
-        in[p].vt_b = s->vt_b;
-        memcpy(in[p].rot, s->rot, sizeof s->rot);
-        memcpy(in[p].tr, s->tr, sizeof s->tr);
-        in[p].ca = v3(s->ca[0], s->ca[1], s->ca[2]);
-        in[p].cb = v3(s->cb[0], s->cb[1], s->cb[2]);
-        in[p].flags = 0;
-        wb_tree_none(&in[p].wall);
-        in[p].iscr = iscr;
-        in[p].rscr = rscr;
-        in[p].pts_cap = pc;
+        ovl_in_from_setup(&in[p], &su[p], 0, iscr, rscr, pc);
         ovl_compute(&in[p], &out[p]);
     }
     double t_hit = 0, t_miss = 0, sink = 0;

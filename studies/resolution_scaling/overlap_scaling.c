@@ -101,29 +101,7 @@ static double time_host(ovl_setup *cf, int n, int flags, double min_time, double
         exit(1);
     }
     for (int i = 0; i < n; i++) {
-        ovl_setup *s = &cf[i];
-        in[i] = (ovl_in){0};
-        in[i].va = s->va;
-        in[i].sa = 1;
-        in[i].ta = s->ta;
-        in[i].nva = s->nva;
-        in[i].nta = s->nta;
-        in[i].vb = s->vb;
-        in[i].tb = s->tb;
-        in[i].vt_a_off = s->vt_a_off;
-        in[i].vt_a = s->vt_a;
-        in[i].vt_b_off = s->vt_b_off;
-        in[i].vt_b = s->vt_b;
-        in[i].nvb = s->nvb;
-        in[i].ntb = s->ntb;
-        memcpy(in[i].rot, s->rot, sizeof s->rot);
-        memcpy(in[i].tr, s->tr, sizeof s->tr);
-        in[i].ca = v3(s->ca[0], s->ca[1], s->ca[2]);
-        in[i].cb = v3(s->cb[0], s->cb[1], s->cb[2]);
-        in[i].flags = flags;
-        in[i].iscr = iscr;
-        in[i].rscr = rscr;
-        in[i].pts_cap = cap;
+        ovl_in_from_setup(&in[i], &cf[i], flags, iscr, rscr, cap);
     }
     long reps = 0;
     double t0 = now(), t, sink = 0, kept_sum = 0;
