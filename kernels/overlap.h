@@ -125,13 +125,11 @@ typedef struct ovl_tri {
     pd_v3 nraw; /* (p1 - p0) x (p2 - p0) */
     pd_v3 lo, hi;
     int full;
-    pd_v3 nu;        /* unit outward normal */
-    pd_v3 e[3];      /* unit direction of edge k: p[k] -> p[k+1] */
-    pd_v3 m[3];      /* unit in-plane normal of edge k pointing into the triangle */
-    int edges;       /* me[], mmax[], elen[] computed */
-    pd_v3 me[3];     /* nraw x (p[k+1] - p[k]): raw inward normal of edge k's plane */
-    pd_real mmax[3]; /* max-norm of me[k] (point-in-triangle margins) */
-    pd_real elen[3]; /* max-norm of p[k+1] - p[k] (crossing points' error bounds) */
+    pd_v3 nu;    /* unit outward normal */
+    pd_v3 e[3];  /* unit direction of edge k: p[k] -> p[k+1] */
+    pd_v3 m[3];  /* unit in-plane normal of edge k pointing into the triangle */
+    int edges;   /* me[] computed */
+    pd_v3 me[3]; /* nraw x (p[k+1] - p[k]): raw inward normal of edge k's plane */
 } ovl_tri;
 
 PD_FN void ovl_tri_make(ovl_tri *t, pd_v3 p0, pd_v3 p1, pd_v3 p2, pd_real pad)
@@ -155,28 +153,24 @@ PD_FN void ovl_tri_edges(ovl_tri *t)
 {
     if (t->edges) return;
     t->edges = 1;
-    for (int k = 0; k < 3; k++) {
-        pd_v3 d = v3_sub(t->p[(k + 1) % 3], t->p[k]);
-        t->me[k] = v3_cross(t->nraw, d);
-        t->mmax[k] = v3_amax(t->me[k]);
-        t->elen[k] = v3_amax(d);
-    }
+    for (int k = 0; k < 3; k++)
+        t->me[k] = v3_cross(t->nraw, v3_sub(t->p[(k + 1) % 3], t->p[k]));
 }
 
 /*
  * Where p, a crossing point on t's plane known to within err (max-norm), lies against t: 1 inside,
  * -1 outside, 0 too close to an edge to tell, in which case the caller decides with the exact
- * canonical predicates (so the two triangles of an edge still agree bit for bit). t's edges are
- * known (ovl_tri_edges or ovl_tri_cached).
+ * canonical predicates (so the two triangles of an edge still agree bit for bit).
  */
-PD_FN int ovl_point_in_tri(const ovl_tri *t, pd_v3 p, pd_real err)
+PD_FN int ovl_point_in_tri(ovl_tri *t, pd_v3 p, pd_real err)
 {
+    ovl_tri_edges(t);
     /* all three edges, combined without branches: for a new pair which edge rejects the point
      * is unpredictable (as in ovl_sign) */
     int inside = 1, outside = 0;
     for (int k = 0; k < 3; k++) {
         pd_real v = v3_dot(t->me[k], v3_sub(p, t->p[k]));
-        pd_real margin = PD_R(4) * t->mmax[k] * err;
+        pd_real margin = PD_R(4) * v3_amax(t->me[k]) * err;
         outside |= v < -margin;
         inside &= v > margin;
     }
@@ -205,10 +199,6 @@ PD_FN void ovl_tri_cached(ovl_tri *t, const ovl_ctx *c, PD_GLOBAL const pd_real 
     t->me[0] = v3(uc[9], uc[10], uc[11]);
     t->me[1] = v3(uc[12], uc[13], uc[14]);
     t->me[2] = v3(uc[15], uc[16], uc[17]);
-    for (int k = 0; k < 3; k++) {
-        t->mmax[k] = uc[18 + k];
-        t->elen[k] = uc[21 + k];
-    }
     t->edges = 1;
     t->full = 0;
     t->nu = t->nraw;
@@ -232,13 +222,13 @@ PD_FN pd_v3 ovl_cross_point(pd_v3 plo, pd_v3 phi, pd_real slo, pd_real shi)
 }
 
 /*
- * Error bound (max-norm) of ovl_cross_point's node on an edge of max-norm length len: the side
- * values carry up to tol3 each, which moves the node along the edge by len tol3 / |s0 - s1|; plus
- * the coordinates' own rounding.
+ * Error bound (max-norm) of ovl_cross_point's node: the side values carry up to tol3 each, which
+ * moves the node along the edge by |a1 - a0| tol3 / |s0 - s1|; plus the coordinates' own rounding.
  */
-PD_FN pd_real ovl_cross_err(const ovl_ctx *c, pd_real len, pd_real s0, pd_real s1)
+PD_FN pd_real ovl_cross_err(const ovl_ctx *c, pd_v3 a0, pd_v3 a1, pd_real s0, pd_real s1)
 {
     pd_real ds = PD_FABS(s0 - s1);
+    pd_real len = v3_amax(v3_sub(a1, a0));
     return ds > PD_R(0) ? c->pad + PD_R(2) * len * c->tol3 / ds : PD_REAL_MAX;
 }
 
@@ -286,7 +276,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         int i = T->id[k], j = T->id[k1];
         int lo = i < j ? k : k1; /* the canonical end, chosen by index (no branch) */
         pd_v3 p = ovl_cross_point(T->p[lo], T->p[k + k1 - lo], qa[lo], qa[k + k1 - lo]);
-        int in = ovl_point_in_tri(U, p, ovl_cross_err(c, T->elen[k], qa[k], qa[k1]));
+        int in = ovl_point_in_tri(U, p, ovl_cross_err(c, T->p[k], T->p[k1], qa[k], qa[k1]));
         /* near U's edges: the edge's line passes inside U when it turns the same way about all
          * three of U's edges (exact canonical predicates) */
         if (in == 0) {
@@ -307,7 +297,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         int i = U->id[k], j = U->id[k1];
         int lo = i < j ? k : k1;
         pd_v3 p = ovl_cross_point(U->p[lo], U->p[k + k1 - lo], qb[lo], qb[k + k1 - lo]);
-        int in = ovl_point_in_tri(T, p, ovl_cross_err(c, U->elen[k], qb[k], qb[k1]));
+        int in = ovl_point_in_tri(T, p, ovl_cross_err(c, U->p[k], U->p[k1], qb[k], qb[k1]));
         if (in == 0) {
             /* det(u_j - u_i, t_a - u_i, t_b - u_i) equals the orientation of T's edge a->b
              * against U's edge i->j, so the shared canonical predicate decides both tests */
@@ -347,8 +337,6 @@ PD_FN void ovl_pass(ovl_ctx *c)
         T.id[1] = ta[3 * t + 1];
         T.id[2] = ta[3 * t + 2];
         ovl_tri_make(&T, ovl_va(c, T.id[0]), ovl_va(c, T.id[1]), ovl_va(c, T.id[2]), c->pad);
-        /* eagerly: nearly every near triangle is crossed, and a lazy flag mispredicts */
-        ovl_tri_edges(&T);
         /* nodes of A inside B: two cusps per corner, along the triangle's two edges */
         for (int q = 0; q < 3; q++) {
             if (!ovl_vertex_in_b(c, T.id[q])) continue;
@@ -682,10 +670,6 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
                       U.me[2]};
         for (int q = 0; q < 6; q++)
             v3_store(uc, q, v[q]);
-        for (int k = 0; k < 3; k++) {
-            uc[18 + k] = U.mmax[k];
-            uc[21 + k] = U.elen[k];
-        }
         c->near_b[c->nb++] = u;
     }
 

@@ -42,9 +42,8 @@
  * Set by np_wall_local (narrow_phase.h).
  */
 #define OVL_OPEN_B 4
-/* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals, their
- * max-norms, the edges' max-norm lengths (ovl_tri_cached). */
-#define OVL_TRI_CACHE 24
+/* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals. */
+#define OVL_TRI_CACHE 18
 
 /* Input of one overlap computation. Scratch sizes: see ovl_iscratch_len / ovl_rscratch_len. */
 typedef struct ovl_in {
