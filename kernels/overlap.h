@@ -256,10 +256,17 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
     /* a triangle wholly on one side of the other's plane: no edge of either crosses the other */
     for (int k = 0; k < 3; k++)
         sa[k] = ovl_side_a(c, T->p[k], U->p[0], U->nraw, &qa[k]);
-    if (sa[0] == sa[1] && sa[1] == sa[2]) return;
+    /*
+     * Both triangles' sides first, then one branch (lone 3: all on one side): the two rejections
+     * are unpredictable, and one mispredicted branch cost more than U's sides (bench/RESULTS.md).
+     * U's sides count as a degenerate predicate only where T straddles, as when they were
+     * evaluated only then (a tie forces the mirrored second pass).
+     */
+    int dg = c->degenerate, t_cross = ovl_lone(sa) < 3;
     for (int k = 0; k < 3; k++)
         sb[k] = ovl_side_b(c, U->p[k], T->p[0], T->nraw, &qb[k]);
-    if (sb[0] == sb[1] && sb[1] == sb[2]) return;
+    c->degenerate = dg | (c->degenerate & t_cross);
+    if (!(t_cross & (ovl_lone(sb) < 3))) return;
 
     /*
      * The sides are 0 only all together (a vanishing normal, returned above; ties are broken
