@@ -158,6 +158,12 @@ static int read_shape(hid_t f, int i, shape *s)
     return 0;
 }
 
+static int usage(const char *prog)
+{
+    fprintf(stderr, "usage: %s RESULT.h5 [--frame K] [--reps N] [--list]\n", prog);
+    return 2;
+}
+
 int main(int argc, char **argv)
 {
     const char *path = NULL;
@@ -171,15 +177,10 @@ int main(int argc, char **argv)
             list = 1;
         else if (argv[i][0] != '-' && !path)
             path = argv[i];
-        else {
-            fprintf(stderr, "usage: %s RESULT.h5 [--frame K] [--reps N] [--list]\n", argv[0]);
-            return 2;
-        }
+        else
+            return usage(argv[0]);
     }
-    if (!path || reps < 1) {
-        fprintf(stderr, "usage: %s RESULT.h5 [--frame K] [--reps N] [--list]\n", argv[0]);
-        return 2;
-    }
+    if (!path || reps < 1) return usage(argv[0]);
     H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
     hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
     if (f < 0) {
@@ -224,7 +225,11 @@ int main(int argc, char **argv)
     /* each particle's mesh at its size, in its body frame */
     pd_mesh **m = calloc((size_t)n, sizeof *m);
     pd_error err = {0};
-    for (int i = 0; i < n && m; i++) {
+    if (!m) {
+        fprintf(stderr, "contacts: out of memory\n");
+        return 1;
+    }
+    for (int i = 0; i < n; i++) {
         const shape *s = &sh[pshape[i]];
         if (s->sphere) continue;
         double *v = malloc(sizeof(double) * 3 * s->nv);
@@ -290,7 +295,7 @@ int main(int argc, char **argv)
         return 1;
     }
     for (int p = 0; p < np; p++) {
-        ovl_in_from_setup(&in[p], &su[p], 0, iscr, rscr, pc);
+        ovl_in_from_setup(&in[p], &su[p], su[p].va, su[p].vb, 0, iscr, rscr, pc);
         ovl_compute(&in[p], &out[p]);
     }
     double t_hit = 0, t_miss = 0, sink = 0;

@@ -108,7 +108,7 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
     double *rscr = malloc(sizeof(double) * ovl_rscratch_len(s0->nva, s0->nvb, s0->ntb, cap));
     ovl_in in[NCONF];
     for (int i = 0; i < n; i++) {
-        ovl_in_from_setup(&in[i], &cf->s[i], flags, iscr, rscr, cap);
+        ovl_in_from_setup(&in[i], &cf->s[i], cf->s[i].va, cf->s[i].vb, flags, iscr, rscr, cap);
     }
     long reps = 0;
     double t0 = now(), t, sink = 0, kept_sum = 0;

@@ -82,20 +82,22 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
               int dbl, double *out, pd_error *err);
 void ovl_result_unpack(const double r[12], ovl_result *o);
 
-#if defined(PD_OVERLAP_H) && PD_DOUBLE
+#ifdef PD_OVERLAP_H
 /*
- * The kernel's input for s in a double-precision host build, pointing into s (no copies), with
- * the caller's scratch (ovl_scratch_len): for benchmarks that call ovl_compute themselves.
+ * The kernel's input for s in a host build of either precision: A's and B's vertices va, vb as
+ * the kernel's reals (s->va and s->vb themselves in double precision), the caller's scratch
+ * (ovl_scratch_len). For ovl_run_f32/_f64 and the benchmarks that call ovl_compute themselves.
  */
-static inline void ovl_in_from_setup(ovl_in *in, const ovl_setup *s, int flags, int *iscr,
-                                     double *rscr, int pts_cap)
+static inline void ovl_in_from_setup(ovl_in *in, const ovl_setup *s, const pd_real *va,
+                                     const pd_real *vb, int flags, int *iscr, pd_real *rscr,
+                                     int pts_cap)
 {
-    in->va = s->va;
+    in->va = va;
     in->sa = 1;
     in->ta = s->ta;
     in->nva = s->nva;
     in->nta = s->nta;
-    in->vb = s->vb;
+    in->vb = vb;
     in->tb = s->tb;
     in->nvb = s->nvb;
     in->ntb = s->ntb;
@@ -104,11 +106,11 @@ static inline void ovl_in_from_setup(ovl_in *in, const ovl_setup *s, int flags, 
     in->vt_b_off = s->vt_b_off;
     in->vt_b = s->vt_b;
     for (int k = 0; k < 9; k++)
-        in->rot[k] = s->rot[k];
+        in->rot[k] = (pd_real)s->rot[k];
     for (int k = 0; k < 3; k++)
-        in->tr[k] = s->tr[k];
-    in->ca = v3(s->ca[0], s->ca[1], s->ca[2]);
-    in->cb = v3(s->cb[0], s->cb[1], s->cb[2]);
+        in->tr[k] = (pd_real)s->tr[k];
+    in->ca = v3((pd_real)s->ca[0], (pd_real)s->ca[1], (pd_real)s->ca[2]);
+    in->cb = v3((pd_real)s->cb[0], (pd_real)s->cb[1], (pd_real)s->cb[2]);
     in->flags = flags;
     wb_tree_none(&in->wall);
     in->iscr = iscr;

@@ -232,7 +232,7 @@ PD_FN pd_real ovl_cross_err(const ovl_ctx *c, pd_v3 a0, pd_v3 a1, pd_real s0, pd
     return ds > PD_R(0) ? c->pad + PD_R(2) * len * c->tol3 / ds : PD_REAL_MAX;
 }
 
-/* The corner alone on its side of a plane, given three sides (+-1) not all equal. */
+/* The corner alone on its side of a plane, given three sides (+-1); 3 when all are equal. */
 PD_FN int ovl_lone(const int sd[3])
 {
     return 2 * (sd[0] == sd[1]) + (sd[0] == sd[2]);
@@ -262,20 +262,20 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
      * U's sides count as a degenerate predicate only where T straddles, as when they were
      * evaluated only then (a tie forces the mirrored second pass).
      */
-    int dg = c->degenerate, t_cross = ovl_lone(sa) < 3;
+    int dg = c->degenerate, la = ovl_lone(sa), t_cross = la < 3;
     for (int k = 0; k < 3; k++)
         sb[k] = ovl_side_b(c, U->p[k], T->p[0], T->nraw, &qb[k]);
     c->degenerate = dg | (c->degenerate & t_cross);
-    if (!(t_cross & (ovl_lone(sb) < 3))) return;
+    int lb = ovl_lone(sb);
+    if (!(t_cross & (lb < 3))) return;
 
     /*
      * The sides are 0 only all together (a vanishing normal, returned above; ties are broken
-     * otherwise), so exactly one corner of each triangle lies
-     * alone on its side, and the two edges at it are the ones that cross: chosen by arithmetic,
-     * in ascending order (the summation order of an edge-by-edge loop), because which edges
-     * cross is unpredictable for a new pair.
+     * otherwise), so exactly one corner of each triangle lies alone on its side, and the two
+     * edges at it are the ones that cross: chosen by arithmetic, in ascending order (the
+     * summation order of an edge-by-edge loop), because which edges cross is unpredictable for
+     * a new pair.
      */
-    int la = ovl_lone(sa), lb = ovl_lone(sb);
     /* edges of T through U */
     for (int h = 0; h < 2; h++) {
         int k = ovl_lone_edge(la, h);

@@ -101,7 +101,7 @@ static double time_host(ovl_setup *cf, int n, int flags, double min_time, double
         exit(1);
     }
     for (int i = 0; i < n; i++) {
-        ovl_in_from_setup(&in[i], &cf[i], flags, iscr, rscr, cap);
+        ovl_in_from_setup(&in[i], &cf[i], cf[i].va, cf[i].vb, flags, iscr, rscr, cap);
     }
     long reps = 0;
     double t0 = now(), t, sink = 0, kept_sum = 0;
