@@ -16,8 +16,13 @@
  * The force of eq. 4.16 goes as sqrt(V depth), so the report gives the share of sum sqrt(V depth)
  * carried by pairs with rho > 5.
  *
- * --list prints each touching pair: particles, volume (m^3), depth (m), area (m^2), rho, and the
- * single-precision volume (0: missed).
+ * The overlap's separate places (OVL_PLACES, "contact_places": "separate") count them: the report
+ * gives how many pairs touch in several places, what finding them costs, and sum sqrt(V depth)
+ * with each pair's places merged (the thesis) and separate (sum sqrt(V_eff depth_eff), which is
+ * the sum over the places of sqrt(V_k d_k)).
+ *
+ * --list prints each touching pair: particles, volume (m^3), depth (m), area (m^2), rho, the
+ * single-precision volume (0: missed), places and the effective depth (m).
  *
  * usage: build/bench/contacts RESULT.h5 [--frame K] [--reps N] [--list]   (K: default the last)
  */
@@ -284,13 +289,15 @@ int main(int argc, char **argv)
         mt = sh[s].nt > mt ? sh[s].nt : mt;
     }
     int pc = ovl_pts_cap(mt, mt);
-    int *iscr = malloc(sizeof(int) * ovl_iscratch_len(mt, mt, mv, mv));
-    double *rscr = malloc(sizeof(double) * ovl_rscratch_len(mv, mv, mt, pc));
+    int *iscr = malloc(sizeof(int) * (ovl_iscratch_len(mt, mt, mv, mv) + ovl_places_ilen(pc)));
+    double *rscr =
+        malloc(sizeof(double) * (ovl_rscratch_len(mv, mv, mt, pc) + ovl_places_rlen(pc)));
     ovl_in *in = calloc((size_t)np, sizeof *in);
-    ovl_out *out = calloc((size_t)np, sizeof *out);
-    double *rho = malloc(sizeof(double) * np), *verr = malloc(sizeof(double) * np),
-           *nerr = malloc(sizeof(double) * np), *missed = malloc(sizeof(double) * np);
-    if (!iscr || !rscr || !in || !out || !rho || !verr || !nerr || !missed) {
+    ovl_out *out = calloc((size_t)np, sizeof *out), *pl = calloc((size_t)np, sizeof *pl);
+    double *rho = malloc(sizeof(double) * np), *rho_eff = malloc(sizeof(double) * np),
+           *verr = malloc(sizeof(double) * np), *nerr = malloc(sizeof(double) * np),
+           *missed = malloc(sizeof(double) * np);
+    if (!iscr || !rscr || !in || !out || !pl || !rho || !rho_eff || !verr || !nerr || !missed) {
         fprintf(stderr, "contacts: out of memory\n");
         return 1;
     }
@@ -318,10 +325,20 @@ int main(int argc, char **argv)
         else
             t_miss = now() - t0;
     }
+    /* the same touching pairs with their places found */
+    double t_places = now();
+    for (int r = 0; r < reps; r++)
+        for (int p = 0; p < np; p++) {
+            if (!out[p].hit) continue;
+            in[p].flags = OVL_PLACES;
+            ovl_compute(&in[p], &pl[p]);
+            in[p].flags = 0;
+        }
+    t_places = now() - t_places;
 
     /* depth against the overlap's thickness, and single precision against double */
-    int nr = 0, nbig = 0, nboth = 0, nmiss = 0, nextra = 0;
-    double force = 0, force_big = 0;
+    int nr = 0, nbig = 0, nboth = 0, nmiss = 0, nextra = 0, nplaces[5] = {0}, nbig_multi = 0;
+    double force = 0, force_big = 0, force_sep = 0, multi_merged = 0, multi_sep = 0;
     for (int p = 0; p < np; p++) {
         ovl_result s32;
         if (ovl_run_f32(&su[p], &s32) != PD_OK) {
@@ -336,14 +353,23 @@ int main(int argc, char **argv)
         double r = o->depth * o->area / o->volume, fv = sqrt(o->volume * o->depth);
         if (list)
             printf("pair %d %d: volume %.6g m^3, depth %.6g m, area %.6g m^2, rho %.4g, single "
-                   "volume %.6g m^3\n",
+                   "volume %.6g m^3, places %d, effective depth %.6g m\n",
                    pair[2 * p], pair[2 * p + 1], o->volume, o->depth, o->area, r,
-                   s32.hit ? s32.volume : 0);
+                   s32.hit ? s32.volume : 0, pl[p].places, pl[p].depth_eff);
+        rho_eff[nr] = pl[p].depth_eff * o->area / o->volume;
         rho[nr++] = r;
         force += fv;
+        double fs = sqrt(pl[p].vol_eff * pl[p].depth_eff);
+        force_sep += fs;
+        nplaces[pl[p].places < 4 ? pl[p].places : 4]++;
+        if (pl[p].places > 1) {
+            multi_merged += fv;
+            multi_sep += fs;
+        }
         if (r > 5) {
             nbig++;
             force_big += fv;
+            nbig_multi += pl[p].places > 1;
         }
         if (!s32.hit) {
             missed[nmiss++] = o->volume;
@@ -355,6 +381,7 @@ int main(int argc, char **argv)
         nerr[nboth++] = acos(fmin(1, c)) * 180 / 3.14159265358979323846;
     }
     qsort(rho, nr, sizeof *rho, cmp_double);
+    qsort(rho_eff, nr, sizeof *rho_eff, cmp_double);
     qsort(verr, nboth, sizeof *verr, cmp_double);
     qsort(nerr, nboth, sizeof *nerr, cmp_double);
     qsort(missed, nmiss, sizeof *missed, cmp_double);
@@ -372,6 +399,20 @@ int main(int argc, char **argv)
     printf("pairs with rho > 5: %d of %d, carrying %.1f %% of sum sqrt(V depth) (eq. 4.16's force "
            "goes as sqrt(V depth))\n",
            nbig, nr, force > 0 ? 100 * force_big / force : 0);
+    printf(
+        "places (thesis 5.4): one %d, two %d, three %d, four or more %d; %d of the %d pairs with "
+        "rho > 5 touch in several\n",
+        nplaces[1], nplaces[2], nplaces[3], nplaces[4], nbig_multi, nbig);
+    printf("rho with the places' effective depth: median %.3g, 90th %.3g, 99th %.3g, max %.3g\n",
+           quantile(rho_eff, nr, 0.5), quantile(rho_eff, nr, 0.9), quantile(rho_eff, nr, 0.99),
+           nr ? rho_eff[nr - 1] : 0);
+    printf("sum sqrt(V depth): merged %.4g, separate %.4g (%.3f); over the pairs in several "
+           "places: merged %.4g, separate %.4g (%.3f)\n",
+           force, force_sep, force > 0 ? force_sep / force : 0, multi_merged, multi_sep,
+           multi_merged > 0 ? multi_sep / multi_merged : 0);
+    printf("host, one core, double, places found: %.0f ns per touching pair (%+.1f %%)\n",
+           nh ? 1e9 * t_places / ((double)reps * nh) : 0,
+           t_hit > 0 ? 100 * (t_places / t_hit - 1) : 0);
     printf("single precision: %d of the %d touching pairs found, %d missed", nboth, nh, nmiss);
     if (nmiss)
         printf(" (volumes %.2g to %.2g m^3, median %.2g)", missed[0], missed[nmiss - 1],
@@ -398,7 +439,9 @@ int main(int argc, char **argv)
     free(out);
     free(iscr);
     free(rscr);
+    free(pl);
     free(rho);
+    free(rho_eff);
     free(verr);
     free(nerr);
     free(missed);

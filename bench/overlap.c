@@ -13,6 +13,8 @@
  * valgrind --tool=callgrind, which repeat exactly where wall time does not).
  */
 #define PD_DOUBLE 1
+/* the engine's overlap as its kernels run it by default, without separate places */
+#define OVL_PLACES_BUILD 0
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -138,7 +140,8 @@ static double time_cl(pd_device *dev, configs *cf, int n, int dbl, int batch, do
     size_t per = sizeof(double) * reals + sizeof(int) * ints;
     while (batch > 64 && per * batch > ((size_t)256 << 20))
         batch /= 2;
-    double *xf = malloc(sizeof(double) * 18 * batch), *out = malloc(sizeof(double) * 12 * batch);
+    double *xf = malloc(sizeof(double) * 18 * batch),
+           *out = malloc(sizeof(double) * OVL_RESULT_LEN * batch);
     for (int i = 0; i < batch; i++)
         ovl_setup_pack(&cf->s[i % n], xf + 18 * i);
     pd_error err = {0};

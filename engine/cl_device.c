@@ -6,6 +6,7 @@
  * directory. Programs are compiled once per precision, on first use, and kept for the device's
  * life.
  */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -159,12 +160,13 @@ int pd_device_open(int index, pd_device **out, pd_error *err)
 void pd_device_close(pd_device *dev)
 {
     if (!dev) return;
-    for (int i = 0; i < 2; i++) {
+    for (int i = 0; i < 4; i++) {
         if (dev->k_overlap[i]) clReleaseKernel(dev->k_overlap[i]);
         if (dev->prog[i]) clReleaseProgram(dev->prog[i]);
-        for (int p = 0; p < CL_MAX_PROGRAMS; p++)
-            if (dev->cache[p][i]) clReleaseProgram(dev->cache[p][i]);
     }
+    for (int p = 0; p < CL_MAX_PROGRAMS; p++)
+        for (int v = 0; v < 4; v++)
+            if (dev->cache[p][v]) clReleaseProgram(dev->cache[p][v]);
     clReleaseCommandQueue(dev->queue);
     clReleaseContext(dev->ctx);
     free(dev);
@@ -182,26 +184,31 @@ int pd_device_has_fp64(const pd_device *dev)
 static void to_real(void *buf, const double *x, size_t n, int dbl);
 
 /* Builds one embedded program; on failure the error quotes the build log. */
-int cl_build_program(pd_device *dev, const char *name, const char *src, int dbl, cl_program *out,
-                     pd_error *err)
+int cl_build_program(pd_device *dev, const char *name, const char *src, int variant,
+                     cl_program *out, pd_error *err)
 {
     cl_int e;
     cl_program prog = clCreateProgramWithSource(dev->ctx, 1, &src, NULL, &e);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateProgramWithSource", e);
-    e = clBuildProgram(prog, 1, &dev->device, dbl ? "-DPD_DOUBLE=1" : "-DPD_DOUBLE=0", NULL, NULL);
+    char opts[64];
+    snprintf(opts, sizeof opts, "-DPD_DOUBLE=%d -DOVL_PLACES_BUILD=%d", (variant & CL_DOUBLE) != 0,
+             (variant & CL_PLACES) != 0);
+    e = clBuildProgram(prog, 1, &dev->device, opts, NULL, NULL);
     if (e != CL_SUCCESS) {
         char log[4096] = {0};
         clGetProgramBuildInfo(prog, dev->device, CL_PROGRAM_BUILD_LOG, sizeof log - 1, log, NULL);
         clReleaseProgram(prog);
-        return pd_error_set(err, PD_ECL, "opencl: building %s.cl (%s) failed: %.400s", name,
-                            dbl ? "double" : "single", log);
+        return pd_error_set(err, PD_ECL, "opencl: building %s.cl (%s%s) failed: %.400s", name,
+                            (variant & CL_DOUBLE) ? "double" : "single",
+                            (variant & CL_PLACES) ? ", places" : "", log);
     }
     *out = prog;
     return PD_OK;
 }
 
-int cl_program_get(pd_device *dev, const char *name, int dbl, cl_program *out, pd_error *err)
+int cl_program_get(pd_device *dev, const char *name, int variant, cl_program *out, pd_error *err)
 {
+    int dbl = variant & CL_DOUBLE;
     if (dbl && !dev->fp64)
         return pd_error_set(err, PD_EINVAL,
                             "opencl: device '%s' has no cl_khr_fp64; use \"precision\": \"single\"",
@@ -209,12 +216,14 @@ int cl_program_get(pd_device *dev, const char *name, int dbl, cl_program *out, p
     int n = (int)(sizeof pd_cl_sources / sizeof pd_cl_sources[0]);
     for (int i = 0; i < n && i < CL_MAX_PROGRAMS; i++)
         if (strcmp(pd_cl_sources[i].name, name) == 0) {
-            if (!dev->cache[i][dbl]) {
-                int rc = cl_build_program(dev, name, pd_cl_sources[i].source, dbl,
-                                          &dev->cache[i][dbl], err);
+            /* the sources are embedded with their headers: one without the overlap has one build */
+            if (!strstr(pd_cl_sources[i].source, "OVL_PLACES_BUILD")) variant &= ~CL_PLACES;
+            if (!dev->cache[i][variant]) {
+                int rc = cl_build_program(dev, name, pd_cl_sources[i].source, variant,
+                                          &dev->cache[i][variant], err);
                 if (rc != PD_OK) return rc;
             }
-            *out = dev->cache[i][dbl];
+            *out = dev->cache[i][variant];
             return PD_OK;
         }
     return pd_error_set(err, PD_EINVAL, "opencl: no program named %s", name);
@@ -223,10 +232,12 @@ int cl_program_get(pd_device *dev, const char *name, int dbl, cl_program *out, p
 int pd_device_compile_all(pd_device *dev, pd_error *err)
 {
     for (size_t i = 0; i < sizeof pd_cl_sources / sizeof pd_cl_sources[0]; i++)
-        for (int dbl = 0; dbl <= dev->fp64; dbl++) {
+        for (int v = 0; v < 4; v++) {
+            if ((v & CL_DOUBLE) && !dev->fp64) continue;
+            if ((v & CL_PLACES) && !strstr(pd_cl_sources[i].source, "OVL_PLACES_BUILD")) continue;
             cl_program p;
             int rc =
-                cl_build_program(dev, pd_cl_sources[i].name, pd_cl_sources[i].source, dbl, &p, err);
+                cl_build_program(dev, pd_cl_sources[i].name, pd_cl_sources[i].source, v, &p, err);
             if (rc != PD_OK) return rc;
             clReleaseProgram(p);
         }
@@ -279,24 +290,24 @@ done:
     return rc;
 }
 
-/* Compiles the overlap program for one precision on first use. */
-static int device_program(pd_device *dev, int dbl, pd_error *err)
+/* Compiles the overlap program in one variant (CL_DOUBLE, CL_PLACES) on first use. */
+static int device_program(pd_device *dev, int variant, pd_error *err)
 {
-    if (dev->k_overlap[dbl]) return PD_OK;
-    if (dbl && !dev->fp64)
+    if (dev->k_overlap[variant]) return PD_OK;
+    if ((variant & CL_DOUBLE) && !dev->fp64)
         return pd_error_set(
             err, PD_ECL, "opencl: device '%s' has no cl_khr_fp64; use single precision", dev->name);
     cl_program prog;
     cl_int e;
-    int rc = cl_build_program(dev, "overlap", pd_cl_source_overlap, dbl, &prog, err);
+    int rc = cl_build_program(dev, "overlap", pd_cl_source_overlap, variant, &prog, err);
     if (rc != PD_OK) return rc;
     cl_kernel k = clCreateKernel(prog, "overlap_pairs", &e);
     if (e != CL_SUCCESS) {
         clReleaseProgram(prog);
         return CL_FAIL(err, "clCreateKernel(overlap_pairs)", e);
     }
-    dev->prog[dbl] = prog;
-    dev->k_overlap[dbl] = k;
+    dev->prog[variant] = prog;
+    dev->k_overlap[variant] = k;
     return PD_OK;
 }
 
@@ -313,15 +324,17 @@ static void to_real(void *buf, const double *x, size_t n, int dbl)
 int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs, int dbl,
                double *out, pd_error *err)
 {
-    int rc = device_program(dev, dbl, err);
+    /* places (PD_OVERLAP_PLACES in s->flags) only in the build that has them */
+    int variant = (dbl ? CL_DOUBLE : 0) | ((s->flags & PD_OVERLAP_PLACES) ? CL_PLACES : 0);
+    int rc = device_program(dev, variant, err);
     if (rc != PD_OK) return rc;
     size_t rs = dbl ? sizeof(double) : sizeof(float);
-    int cap = ovl_pts_cap(s->nta, s->ntb);
+    int cap = ovl_pts_cap(s->nta, s->ntb), flags = s->flags;
     size_t ilen, rlen;
     ovl_scratch_len(s, &ilen, &rlen);
     size_t n_va = 3 * (size_t)s->nva, n_vb = 3 * (size_t)s->nvb, n_xf = 18 * (size_t)npairs;
     void *hva = malloc(rs * n_va), *hvb = malloc(rs * n_vb), *hxf = malloc(rs * n_xf);
-    void *hout = malloc(rs * 12 * (size_t)npairs);
+    void *hout = malloc(rs * OVL_RESULT_LEN * (size_t)npairs);
     cl_mem b[12] = {0};
     cl_int e = CL_SUCCESS;
     rc = PD_OK;
@@ -352,12 +365,12 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     if (e == CL_SUCCESS)
         b[6] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, rs * rlen * npairs, NULL, &e);
     if (e == CL_SUCCESS)
-        b[7] = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * 12 * npairs, NULL, &e);
+        b[7] = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * OVL_RESULT_LEN * npairs, NULL, &e);
     if (e != CL_SUCCESS) {
         rc = CL_FAIL(err, "clCreateBuffer", e);
         goto done;
     }
-    cl_kernel k = dev->k_overlap[dbl];
+    cl_kernel k = dev->k_overlap[variant];
     cl_int args_e = CL_SUCCESS;
     int ai = 0;
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[0]);
@@ -372,7 +385,7 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
         args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[i]);
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[4]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &npairs);
-    args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->flags);
+    args_e |= clSetKernelArg(k, ai++, sizeof(int), &flags);
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[5]);
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[6]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &cap);
@@ -387,12 +400,13 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
         rc = CL_FAIL(err, "clEnqueueNDRangeKernel(overlap_pairs)", e);
         goto done;
     }
-    e = clEnqueueReadBuffer(dev->queue, b[7], CL_TRUE, 0, rs * 12 * npairs, hout, 0, NULL, NULL);
+    e = clEnqueueReadBuffer(dev->queue, b[7], CL_TRUE, 0, rs * OVL_RESULT_LEN * npairs, hout, 0,
+                            NULL, NULL);
     if (e != CL_SUCCESS) {
         rc = CL_FAIL(err, "clEnqueueReadBuffer", e);
         goto done;
     }
-    for (size_t i = 0; i < 12 * (size_t)npairs; i++)
+    for (size_t i = 0; i < OVL_RESULT_LEN * (size_t)npairs; i++)
         out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
 done:
     for (int i = 0; i < 12; i++)
@@ -413,7 +427,7 @@ void ovl_setup_pack(const ovl_setup *s, double xf[18])
     memcpy(xf + 15, s->cb, 3 * sizeof(double));
 }
 
-void ovl_result_unpack(const double r[12], ovl_result *o)
+void ovl_result_unpack(const double r[OVL_RESULT_LEN], ovl_result *o)
 {
     o->hit = r[0] != 0;
     o->degenerate = r[1] != 0;
@@ -425,15 +439,19 @@ void ovl_result_unpack(const double r[12], ovl_result *o)
         o->normal[k] = r[8 + k];
     }
     o->depth = r[11];
+    o->places = (int)r[12];
+    o->vol_eff = r[13];
+    o->depth_eff = r[14];
 }
 
 int pd_overlap_cl(pd_device *dev, const pd_mesh *a, const pd_pose *pa, const pd_mesh *b,
                   const pd_pose *pb, int flags, pd_contact *out, pd_error *err)
 {
     ovl_setup s;
-    double xf[18], r[12];
+    double xf[18], r[OVL_RESULT_LEN];
     ovl_result res;
-    int rc = ovl_setup_make(a, pa, b, pb, flags & ~PD_OVERLAP_SINGLE, &s, err);
+    int rc =
+        ovl_setup_make(a, pa, b, pb, (flags & ~PD_OVERLAP_SINGLE) | PD_OVERLAP_PLACES, &s, err);
     if (rc != PD_OK) return rc;
     ovl_setup_pack(&s, xf);
     rc = ovl_run_cl(dev, &s, xf, 1, !(flags & PD_OVERLAP_SINGLE), r, err);
@@ -475,7 +493,7 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     cl_mem b[13] = {0};
     cl_kernel k = NULL;
     cl_int e = CL_SUCCESS;
-    void *hout = malloc(rs * 12 * (size_t)npairs);
+    void *hout = malloc(rs * OVL_RESULT_LEN * (size_t)npairs);
     rc = PD_OK;
     for (int i = 0; i < 4; i++) {
         host[i] = malloc(rs * (len[i] ? len[i] : 1));
@@ -511,7 +529,7 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
         b[12] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, rs * rlen * npairs, NULL, &e);
     cl_mem bout = NULL;
     if (e == CL_SUCCESS)
-        bout = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * 12 * npairs, NULL, &e);
+        bout = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * OVL_RESULT_LEN * npairs, NULL, &e);
     if (e == CL_SUCCESS) k = clCreateKernel(prog, "narrow_phase", &e);
     if (e != CL_SUCCESS) {
         if (bout) clReleaseMemObject(bout);
@@ -535,15 +553,15 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     if (ae == CL_SUCCESS)
         e = clEnqueueNDRangeKernel(dev->queue, k, 1, NULL, &global, NULL, 0, NULL, NULL);
     if (ae == CL_SUCCESS && e == CL_SUCCESS)
-        e = clEnqueueReadBuffer(dev->queue, bout, CL_TRUE, 0, rs * 12 * npairs, hout, 0, NULL,
-                                NULL);
+        e = clEnqueueReadBuffer(dev->queue, bout, CL_TRUE, 0, rs * OVL_RESULT_LEN * npairs, hout, 0,
+                                NULL, NULL);
     clReleaseMemObject(bout);
     if (ae != CL_SUCCESS || e != CL_SUCCESS) {
         rc = ae != CL_SUCCESS ? pd_error_set(err, PD_ECL, "opencl: narrow_phase arguments")
                               : CL_FAIL(err, "narrow_phase", e);
         goto done;
     }
-    for (size_t i = 0; i < 12 * (size_t)npairs; i++)
+    for (size_t i = 0; i < OVL_RESULT_LEN * (size_t)npairs; i++)
         out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
 done:
     for (int i = 0; i < 13; i++)

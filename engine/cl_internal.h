@@ -17,9 +17,9 @@ struct pd_device {
     cl_device_id device;
     cl_context ctx;
     cl_command_queue queue;
-    cl_program prog[2]; /* overlap program: [0] single, [1] double */
-    cl_kernel k_overlap[2];
-    cl_program cache[CL_MAX_PROGRAMS][2]; /* programs by pd_cl_sources index and precision */
+    cl_program prog[4]; /* overlap program by variant (CL_DOUBLE, CL_PLACES) */
+    cl_kernel k_overlap[4];
+    cl_program cache[CL_MAX_PROGRAMS][4]; /* programs by pd_cl_sources index and variant */
     int fp64;
     int gpu;           /* a GPU (wide parallelism) rather than a CPU */
     int compute_units; /* CL_DEVICE_MAX_COMPUTE_UNITS */
@@ -32,12 +32,21 @@ const char *cl_errstr(cl_int e);
 #define CL_FAIL(err, what, e)                                                                      \
     pd_error_set(err, PD_ECL, "opencl: %s failed: %s (%d)", what, cl_errstr(e), (int)(e))
 
-/* Builds one embedded program; on failure the error quotes the build log. */
-int cl_build_program(pd_device *dev, const char *name, const char *src, int dbl, cl_program *out,
-                     pd_error *err);
+/*
+ * A program's build variant: bit 0 double precision (PD_DOUBLE), CL_PLACES the overlap's separate
+ * places compiled in (OVL_PLACES_BUILD, kernels/overlap_predicates.h; off, an overlap costs what
+ * it did before them). 0 and 1 are the plain single and double builds.
+ */
+#define CL_DOUBLE 1
+#define CL_PLACES 2
 
-/* The embedded program `name` (kernels/<name>.cl) built for dev in one precision, compiled on
- * first use and kept for the device's life (released by pd_device_close). */
-int cl_program_get(pd_device *dev, const char *name, int dbl, cl_program *out, pd_error *err);
+/* Builds one embedded program in a variant; on failure the error quotes the build log. */
+int cl_build_program(pd_device *dev, const char *name, const char *src, int variant,
+                     cl_program *out, pd_error *err);
+
+/* The embedded program `name` (kernels/<name>.cl) built for dev in a variant, compiled on first
+ * use and kept for the device's life (released by pd_device_close). CL_PLACES is dropped for a
+ * program that does not contain the overlap (the same build). */
+int cl_program_get(pd_device *dev, const char *name, int variant, cl_program *out, pd_error *err);
 
 #endif

@@ -130,6 +130,9 @@ void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *ou
     if (!r->hit) return;
     out->volume = r->volume;
     out->depth = r->depth;
+    out->places = r->places;
+    out->effective_volume = r->vol_eff;
+    out->effective_depth = r->depth_eff;
     for (int i = 0; i < 3; i++) {
         double c = s->xa[i], n = 0;
         for (int k = 0; k < 3; k++) {

@@ -27,13 +27,19 @@ typedef struct ovl_setup {
 typedef struct ovl_result {
     int hit, degenerate, kept_a, kept_b;
     double volume, centroid[3], normal[3], depth;
+    int places;                /* OVL_PLACES (always asked for by ovl_run_*): separate places */
+    double vol_eff, depth_eff; /* the force law's volume and depth over them (ovl_places) */
 } ovl_result;
+
+/* Reals in a kernel's result record (OVL_OUT_LEN in kernels/overlap_predicates.h). */
+#define OVL_RESULT_LEN 15
 
 /* Runs the host build of the kernel. Returns PD_OK or PD_ENOMEM. */
 int ovl_run_f64(const ovl_setup *s, ovl_result *r);
 int ovl_run_f32(const ovl_setup *s, ovl_result *r);
 
-/* Scratch one overlap of s needs: ints and reals (of the kernel's precision). */
+/* Scratch one overlap of s needs, OVL_PLACES's included: ints and reals (of the kernel's
+ * precision). */
 void ovl_scratch_len(const ovl_setup *s, size_t *ints, size_t *reals);
 
 /* Capacity of the node buffer used for the depth; larger overlaps recompute instead. */
@@ -55,9 +61,10 @@ int ovl_vertex_triangles(const pd_mesh *m, int **off, int **vt);
 void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *out);
 
 /*
- * Runs the OpenCL kernel for npairs placements of B against A (cl_device.c): xf holds 18 doubles
- * per pair (rot, tr, ca, cb as in ovl_setup; see ovl_setup_pack), out receives 12 per pair
- * (see ovl_result_unpack). dbl selects the double-precision program.
+ * Runs the OpenCL kernel for npairs placements of B against A (cl_device.c), with the overlap's
+ * places when s->flags has PD_OVERLAP_PLACES (pd_overlap_cl sets it): xf holds 18 doubles
+ * per pair (rot, tr, ca, cb as in ovl_setup; see ovl_setup_pack), out receives OVL_RESULT_LEN
+ * per pair (see ovl_result_unpack). dbl selects the double-precision program.
  */
 int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs, int dbl,
                double *out, pd_error *err);
@@ -75,12 +82,13 @@ typedef struct np_tables {
 
 /*
  * Runs the narrow-phase kernel (kernels/narrow.cl) for npairs pairs of nbody particles (x 3n,
- * q 4n, size n, shape n) on dev; out receives 12 doubles per pair as the kernel writes them.
+ * q 4n, size n, shape n) on dev; out receives OVL_RESULT_LEN doubles per pair as the kernel writes
+ * them.
  */
 int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double *q,
               const double *size, const int *shape, int nbody, const int *pairs, int npairs,
               int dbl, double *out, pd_error *err);
-void ovl_result_unpack(const double r[12], ovl_result *o);
+void ovl_result_unpack(const double r[OVL_RESULT_LEN], ovl_result *o);
 
 #ifdef PD_OVERLAP_H
 /*

@@ -124,6 +124,7 @@ int pd_quat_to_matrix(const double q[4], double r[3][3]);
 enum {
     PD_OVERLAP_SINGLE = 1,    /* compute in single precision */
     PD_OVERLAP_NO_FILTER = 2, /* skip the half-plane triangle filter (eqs. 5.3-5.5) */
+    PD_OVERLAP_PLACES = 8,    /* separate places (thesis 5.4); pd_overlap_host/_cl set it */
 };
 
 /* One contact between A and B, in world coordinates. */
@@ -135,6 +136,14 @@ typedef struct pd_contact {
     double depth;       /* extent of the overlap along normal, m */
     int degenerate;     /* 1 when a coplanar or touching configuration was resolved */
     int tris_a, tris_b; /* triangles that survived the filter */
+    /*
+     * The overlap's separate places (thesis section 5.4: connected parts of the overlap), and the
+     * volume (m^3) and depth (m) that make eqs. 4.16-4.18 the sum of each place's own force and
+     * stiffnesses; equal to volume and depth for one place. What "contact_places": "separate"
+     * gives the force law (docs/SCENARIO.md).
+     */
+    int places;
+    double effective_volume, effective_depth;
 } pd_contact;
 
 /* Overlap of A at pose pa with B at pose pb, computed on the host by the kernel's own code. */

@@ -330,6 +330,7 @@ static void parse_interactions(sc_parse *p, json_t *root)
                                        "normal_stiffness",
                                        "tangential_stiffness",
                                        "damping_coefficient",
+                                       "contact_places",
                                        NULL};
     pd_scenario *s = p->s;
     json_t *a = arr(p, root, "", "interactions");
@@ -374,6 +375,17 @@ static void parse_interactions(sc_parse *p, json_t *root)
         else if (model && strcmp(model, "hertz_mindlin")) {
             child(c, sizeof c, at, "model");
             diag(p, c, "must be \"hertz_mindlin\" or \"linear\", got \"%s\"", model);
+        }
+        const char *places = str(p, v, at, "contact_places", 0);
+        x.separate_places = places && !strcmp(places, "separate");
+        if (places && !x.separate_places && strcmp(places, "merged")) {
+            child(c, sizeof c, at, "contact_places");
+            diag(p, c, "must be \"merged\" or \"separate\", got \"%s\"", places);
+        } else if (x.separate_places && x.model == SC_MODEL_LINEAR) {
+            child(c, sizeof c, at, "contact_places");
+            diag(p, c,
+                 "\"separate\" is for \"model\": \"hertz_mindlin\" (the linear model's "
+                 "force is not a function of volume and depth)");
         }
         x.friction = num(p, v, at, "friction", 0, 0.5, NONNEG, "");
         x.damping = num(p, v, at, "damping", 0, 0, NONNEG, "");

@@ -23,6 +23,7 @@ typedef struct sc_interaction {
     int model;
     double friction, damping, cohesion, cohesion_range;
     double normal_stiffness, tangential_stiffness, damping_coefficient; /* linear model only */
+    int separate_places; /* "contact_places": "separate" (thesis 5.4; kernels/overlap.h) */
 } sc_interaction;
 
 enum { SC_SHAPE_MESH = 0, SC_SHAPE_SPHERE = 1 };

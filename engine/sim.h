@@ -41,8 +41,9 @@ typedef struct sim_pairs {
 typedef struct sim {
     pd_device *dev;
     const pd_scenario *s;
-    int dbl;   /* double precision on the device */
-    size_t rs; /* sizeof(pd_real) on the device */
+    int dbl;    /* double precision on the device */
+    int places; /* an interaction asks for separate places: the CL_PLACES build, its scratch */
+    size_t rs;  /* sizeof(pd_real) on the device */
     int n, nwall, nbody, nmat, nshape;
     double dt;
     long long step;

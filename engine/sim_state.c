@@ -362,6 +362,10 @@ static int upload_shapes(sim *m, pd_error *err)
         m->ilen = il > m->ilen ? il : m->ilen;
         m->rlen = rl > m->rlen ? rl : m->rlen;
     }
+    if (m->places) { /* the places' scratch follows the overlap's */
+        m->ilen += ovl_places_ilen(m->pts_cap);
+        m->rlen += ovl_places_rlen(m->pts_cap);
+    }
     cl_int e = CL_SUCCESS;
     int ok = 1;
     m->vert = mk(m, m->rs * 3 * (size_t)voff[ns], &ok, &e);
@@ -428,6 +432,7 @@ static int upload_params(sim *m, pd_error *err)
             p[CP_KE] = in->normal_stiffness;
             p[CP_KF] = in->tangential_stiffness;
             p[CP_ETA] = in->damping_coefficient;
+            p[CP_PLACES] = in->separate_places;
             if (in->cohesion > 0 && 0.5 * in->cohesion_range > m->margin)
                 m->margin = 0.5 * in->cohesion_range;
         }
@@ -580,6 +585,8 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->dev = dev;
     m->s = s;
     m->dbl = s->double_precision;
+    for (int k = 0; k < s->nint; k++) /* "contact_places": "separate" (kernels/overlap.h) */
+        m->places |= s->inter[k].separate_places;
     m->rs = m->dbl ? sizeof(double) : sizeof(float);
     m->dt = s->dt;
     m->nwall = s->nwall;
@@ -603,7 +610,8 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     }
     for (int i = 0; i < NKERNELS; i++) {
         cl_program prog;
-        rc = cl_program_get(dev, kernel_names[i][0], m->dbl, &prog, err);
+        rc = cl_program_get(dev, kernel_names[i][0], m->dbl | (m->places ? CL_PLACES : 0), &prog,
+                            err);
         if (rc != PD_OK) goto fail;
         cl_int e;
         *kernel_slot(m, i) = clCreateKernel(prog, kernel_names[i][1], &e);

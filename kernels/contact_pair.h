@@ -41,6 +41,7 @@ enum {
     CP_KE,        /* linear normal stiffness, N/m */
     CP_KF,        /* linear tangential (friction) stiffness, N/m */
     CP_ETA,       /* linear damping coefficient, N s/m */
+    CP_PLACES,    /* 1: "contact_places": "separate" (OVL_PLACES) */
     CP_NPARAM
 };
 
@@ -443,7 +444,7 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
     } else {
         ovl_in in;
         pd_real ra[9];
-        np_setup(&wd->sh, &a, &b, 0, &in, ra);
+        np_setup(&wd->sh, &a, &b, pr[CP_PLACES] != PD_R(0) ? OVL_PLACES : 0, &in, ra);
         if (wall_b) { /* the wall's triangles near a, from its BVH (thesis section 5.6) */
             int wi = ib - wd->nparticles;
             wb_tree t;
@@ -484,8 +485,9 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         np_to_world(&a, ra, &o);
         n = o.normal;
         c = o.centroid;
-        delta = o.depth;
-        vol = o.volume;
+        /* one place: depth and volume; several (OVL_PLACES): their forces' and stiffnesses' sum */
+        delta = o.depth_eff;
+        vol = o.vol_eff;
         volumetric = 1;
     }
     pd_real le = pr[CP_LE], kc = pr[CP_KC];

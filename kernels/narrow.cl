@@ -2,8 +2,8 @@
  * narrow.cl - the narrow phase over candidate pairs (kernels/narrow_phase.h), one work-item per
  * pair. Built with -DPD_DOUBLE=0 or 1. Particles: x (3n), q (4n, [w, x, y, z]), size (n),
  * shape (n); shapes as in narrow_phase.h. Each pair gets ilen ints and rlen reals of scratch and
- * writes 12 reals: hit, degenerate, kept_a, kept_b, volume, centroid[3], normal[3], depth, in
- * world coordinates (the normal from the pair's first particle into its second).
+ * writes OVL_OUT_LEN reals (ovl_out_store), in world coordinates (the normal from the pair's first
+ * particle into its second).
  */
 #include "pd_real.h"
 #include "narrow_phase.h"
@@ -44,5 +44,5 @@ __kernel void narrow_phase(__global const int *pairs, int npairs, __global const
     ovl_out o;
     ovl_compute(&in, &o);
     np_to_world(&b[0], ra, &o);
-    ovl_out_store(out + 12 * g, &o);
+    ovl_out_store(out + OVL_OUT_LEN * g, &o);
 }

@@ -1,8 +1,8 @@
 /*
  * overlap.cl - the polyhedral overlap of kernels/overlap.h, one work-item per pair.
  * Built with -DPD_DOUBLE=0 or 1. Each pair places B by its own transform (18 reals: rot[9],
- * tr[3], ca[3], cb[3]) and writes 12 reals: hit, degenerate, kept_a, kept_b, volume,
- * centroid[3], normal[3], depth.
+ * tr[3], ca[3], cb[3]) and writes OVL_OUT_LEN reals (ovl_out_store). Scratch per pair: the
+ * overlap's own and OVL_PLACES's (ovl_places_ilen/_rlen), whether flags ask for places or not.
  */
 #include "pd_real.h"
 #include "overlap.h"
@@ -39,10 +39,12 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
     in.cb = v3(x[15], x[16], x[17]);
     in.flags = flags;
     wb_tree_none(&in.wall);
-    in.iscr = iscr + (size_t)g * (size_t)ovl_iscratch_len(nta, ntb, nva, nvb);
-    in.rscr = rscr + (size_t)g * (size_t)ovl_rscratch_len(nva, nvb, ntb, pts_cap);
+    in.iscr = iscr +
+              (size_t)g * (size_t)(ovl_iscratch_len(nta, ntb, nva, nvb) + ovl_places_ilen(pts_cap));
+    in.rscr = rscr + (size_t)g * (size_t)(ovl_rscratch_len(nva, nvb, ntb, pts_cap) +
+                                          ovl_places_rlen(pts_cap));
     in.pts_cap = pts_cap;
     ovl_out o;
     ovl_compute(&in, &o);
-    ovl_out_store(out + 12 * g, &o);
+    ovl_out_store(out + OVL_OUT_LEN * g, &o);
 }

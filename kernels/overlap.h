@@ -30,6 +30,12 @@ PD_FN void ovl_cusp(ovl_ctx *c, pd_v3 p, pd_v3 t, pd_v3 n, pd_v3 nu, int on_b)
     pd_real vol = area * hp / PD_R(3.0); /* eq. 5.10: -(1/6)(t.p)(n.p)(b.p) */
     c->vol += vol;
     c->vol_abs += PD_FABS(vol);
+    if (OVL_PLACES_BUILD && c->cur_node >= 0) { /* its node's share (ovl_places) */
+        PD_GLOBAL pd_real *ar = ovl_ndr(c, OVL_ND_AREA);
+        ovl_ndr(c, OVL_ND_VOL)[c->cur_node] += vol;
+        v3_store(ar, c->cur_node,
+                 v3_add(v3_load(ar, c->cur_node), v3_scale(nu, on_b ? -area : area)));
+    }
     /*
      * eq. 5.11: the simplex of eq. 5.8 has nodes p, p - (t.p)t, p - (t.p)t - (n.p)n and the
      * origin, so its centroid is (3p - 2(t.p)t - (n.p)n)/4 (the printed eq. 5.11 flips both signs).
@@ -42,25 +48,79 @@ PD_FN void ovl_cusp(ovl_ctx *c, pd_v3 p, pd_v3 t, pd_v3 n, pd_v3 nu, int on_b)
         c->area_a = v3_add(c->area_a, v3_scale(nu, area));
 }
 
-/* Records a node of the overlap for the depth (or projects it in depth mode). */
-PD_FN void ovl_node(ovl_ctx *c, pd_v3 p)
+/*
+ * Records a node of the overlap for the depth (or projects it in depth mode) and returns its index
+ * in this pass (-1 in depth mode).
+ */
+PD_FN int ovl_node(ovl_ctx *c, pd_v3 p)
 {
     if (c->depth_mode) {
         pd_real s = v3_dot(p, c->n);
         if (s < c->lo) c->lo = s;
         if (s > c->hi) c->hi = s;
-    } else if (c->store_pts) {
+        return -1;
+    }
+    if (c->store_pts) {
         if (c->npts < c->in->pts_cap)
             v3_store(c->pts, c->npts++, p);
         else
             c->pts_overflow = 1;
     }
+    return OVL_PLACES_BUILD ? c->inode++ : 0;
+}
+
+/* OVL_PLACES, where a recording pass emits the cusps of node idx: their volume is summed to it. */
+PD_FN void ovl_cusps_of(ovl_ctx *c, int idx)
+{
+    c->cur_node = idx >= 0 && idx < c->in->pts_cap ? idx : -1;
 }
 
 /*
- * The three cusps at a node where edge (of face F, unit direction te pointing into the other solid,
- * in-face inward normal m) pierces face G of the other solid: one along the edge, and one on each
- * face along their line of intersection, heading into F (eq. 5.7's t, n, b at that node).
+ * OVL_PLACES: keeps what ovl_places needs of node idx (key, end, fl, lam: see ovl_ctx) in the pass
+ * that stores the nodes, and starts its sums in a recording pass. Returns whether it is kept.
+ */
+PD_FN int ovl_node_key(ovl_ctx *c, int idx, int key, int end, int fl, pd_real lam)
+{
+    if (idx < 0 || idx >= c->in->pts_cap) return 0;
+    if (c->store_pts) {
+        ovl_ndi(c, OVL_ND_KEY)[idx] = key;
+        ovl_ndi(c, OVL_ND_END)[idx] = end;
+        ovl_ndi(c, OVL_ND_FL)[idx] = fl;
+        ovl_ndr(c, OVL_ND_LAM)[idx] = lam;
+        ovl_ndi(c, OVL_ND_PAR)[idx] = idx;
+    }
+    if (c->rec) {
+        ovl_ndr(c, OVL_ND_VOL)[idx] = PD_R(0);
+        v3_store(ovl_ndr(c, OVL_ND_AREA), idx, v3(0, 0, 0));
+        c->cur_node = idx;
+    }
+    return 1;
+}
+
+/* Union-find over the nodes (ovl_places): the smaller index is the root, so the result does not
+ * depend on the order of the unions. */
+PD_FN int ovl_find(PD_GLOBAL int *par, int x)
+{
+    while (par[x] != x) {
+        par[x] = par[par[x]];
+        x = par[x];
+    }
+    return x;
+}
+
+PD_FN void ovl_union(PD_GLOBAL int *par, int a, int b)
+{
+    a = ovl_find(par, a);
+    b = ovl_find(par, b);
+    if (a < b) par[b] = a;
+    if (b < a) par[a] = b;
+}
+
+/*
+ * The three cusps at a node (the caller emits it: ovl_node) where edge (of face F, unit direction
+ * te pointing into the other solid, in-face inward normal m) pierces face G of the other solid:
+ * one along the edge, and one on each face along their line of intersection, heading into F
+ * (eq. 5.7's t, n, b at that node).
  */
 PD_FN void ovl_crossing_cusps(ovl_ctx *c, pd_v3 p, pd_v3 te, pd_v3 m, pd_v3 nf, pd_v3 ng,
                               int f_on_b)
@@ -72,7 +132,6 @@ PD_FN void ovl_crossing_cusps(ovl_ctx *c, pd_v3 p, pd_v3 te, pd_v3 m, pd_v3 nf, 
         /* faces parallel to within rounding have no line of intersection; predicates that
          * disagree by rounding can still report a crossing, which carries no area */
         ovl_cusp(c, p, te, m, nf, f_on_b);
-        ovl_node(c, p);
         return;
     }
     pd_v3 l = v3_scale(cr, PD_R(1) / len);
@@ -83,7 +142,6 @@ PD_FN void ovl_crossing_cusps(ovl_ctx *c, pd_v3 p, pd_v3 te, pd_v3 m, pd_v3 nf, 
     ovl_cusp(c, p, te, m, nf, f_on_b);
     ovl_cusp(c, p, l, n_f, nf, f_on_b);
     ovl_cusp(c, p, l, n_g, ng, !f_on_b);
-    ovl_node(c, p);
 }
 
 PD_FN int ovl_vertex_in_b(ovl_ctx *c, int i)
@@ -92,8 +150,9 @@ PD_FN int ovl_vertex_in_b(ovl_ctx *c, int i)
     if (!(st & OVL_V_TESTED)) {
         st |= OVL_V_TESTED;
         if (ovl_inside_b(c, i)) {
-            st |= OVL_V_INSIDE;
-            ovl_node(c, ovl_va(c, i));
+            int idx = ovl_node(c, ovl_va(c, i));
+            if (OVL_PLACES_BUILD && c->places) ovl_node_key(c, idx, 2 * i, -1, 0, PD_R(0));
+            st |= OVL_V_INSIDE | (idx + 1) * OVL_V_NODE;
         }
         c->st_a[i] = st;
     }
@@ -106,8 +165,9 @@ PD_FN int ovl_vertex_in_a(ovl_ctx *c, int j)
     if (!(st & OVL_V_TESTED)) {
         st |= OVL_V_TESTED;
         if (ovl_inside_a(c, j)) {
-            st |= OVL_V_INSIDE;
-            ovl_node(c, ovl_vb(c, j));
+            int idx = ovl_node(c, ovl_vb(c, j));
+            if (OVL_PLACES_BUILD && c->places) ovl_node_key(c, idx, 2 * j + 1, -1, 0, PD_R(0));
+            st |= OVL_V_INSIDE | (idx + 1) * OVL_V_NODE;
         }
         c->st_b[j] = st;
     }
@@ -210,15 +270,45 @@ PD_FN int ovl_box_meets(const ovl_ctx *c, const ovl_tri *t)
              t->lo.y > c->box_hi.y || t->hi.z < c->box_lo.z || t->lo.z > c->box_hi.z);
 }
 
-/* Crossing point of canonical edge lo->hi with a plane, from the edge ends' signed distances. */
-PD_FN pd_v3 ovl_cross_point(pd_v3 plo, pd_v3 phi, pd_real slo, pd_real shi)
+/* Where canonical edge lo->hi crosses a plane, from its ends' signed distances: 0 at lo, 1 at hi.
+ */
+PD_FN pd_real ovl_cross_lam(pd_real slo, pd_real shi)
 {
     pd_real den = slo - shi;
     pd_real lam = den != PD_R(0) ? slo / den : PD_R(0);
     /* the crossing lies on the edge; when both ends are within rounding of the plane the
      * quotient is noise, and must not throw the node off the edge */
-    lam = lam < PD_R(0) ? PD_R(0) : lam > PD_R(1) ? PD_R(1) : lam;
-    return v3_add(plo, v3_scale(v3_sub(phi, plo), lam));
+    return lam < PD_R(0) ? PD_R(0) : lam > PD_R(1) ? PD_R(1) : lam;
+}
+
+/* Crossing point of canonical edge lo->hi with a plane, from the edge ends' signed distances. */
+PD_FN pd_v3 ovl_cross_point(pd_v3 plo, pd_v3 phi, pd_real slo, pd_real shi)
+{
+    return v3_add(plo, v3_scale(v3_sub(phi, plo), ovl_cross_lam(slo, shi)));
+}
+
+/*
+ * OVL_PLACES: emits the node where T's edge k (side 0: of A; 1: of B) crosses the other triangle,
+ * before its cusps, and joins it to the pair's first crossing (a segment of the faces' intersection
+ * joins them). sk1: the side of the edge's end k + 1. Returns the updated first crossing.
+ */
+PD_FN int ovl_crossing_node(ovl_ctx *c, const ovl_tri *T, int k, int lo, pd_v3 p, const pd_real *q,
+                            int sk1, int side, int first)
+{
+    int k1 = (k + 1) % 3, hi = k + k1 - lo;
+    int vlo = T->id[lo], vhi = T->id[hi];
+    /* heading into the other solid towards the higher end: edge k runs k -> k1, and the other
+     * solid lies away from k1's side */
+    int fl = (lo == k) == (sk1 < 0);
+    int idx = ovl_node(c, p);
+    if (ovl_node_key(c, idx, 2 * vlo + side, vhi, fl, ovl_cross_lam(q[lo], q[hi])) &&
+        c->store_pts) {
+        if (first >= 0)
+            ovl_union(ovl_ndi(c, OVL_ND_PAR), first, idx);
+        else
+            first = idx;
+    }
+    return first;
 }
 
 /*
@@ -276,6 +366,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
      * summation order of an edge-by-edge loop), because which edges cross is unpredictable for
      * a new pair.
      */
+    int first = -1; /* the first crossing node of this pair (OVL_PLACES) */
     /* edges of T through U */
     for (int h = 0; h < 2; h++) {
         int k = ovl_lone_edge(la, h);
@@ -294,6 +385,10 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         if (in != 1) continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
+        if (OVL_PLACES_BUILD && c->places)
+            first = ovl_crossing_node(c, T, k, lo, p, qa, sa[k1], 0, first);
+        else
+            ovl_node(c, p);
         pd_v3 te = v3_scale(T->e[k], (pd_real)-sa[k1]); /* into U's solid; sa is +-1 */
         ovl_crossing_cusps(c, p, te, T->m[k], T->nu, U->nu, 0);
     }
@@ -315,6 +410,10 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         if (in != 1) continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
+        if (OVL_PLACES_BUILD && c->places)
+            first = ovl_crossing_node(c, U, k, lo, p, qb, sb[k1], 1, first);
+        else
+            ovl_node(c, p);
         pd_v3 te = v3_scale(U->e[k], (pd_real)-sb[k1]);
         ovl_crossing_cusps(c, p, te, U->m[k], U->nu, T->nu, 1);
     }
@@ -329,6 +428,9 @@ PD_FN void ovl_pass(ovl_ctx *c)
     c->vol = c->vol_abs = PD_R(0);
     c->moment = c->area_a = c->area_b = v3(0, 0, 0);
     c->origin_in_b = -1; /* its ties follow c->flip */
+    c->inode = 0;
+    c->rec = c->places && !c->flip && !c->depth_mode;
+    c->cur_node = -1;
     /* only the kept triangles' corners are ever tested */
     for (int k = 0; k < c->ka; k++)
         for (int q = 0; q < 3; q++)
@@ -349,6 +451,7 @@ PD_FN void ovl_pass(ovl_ctx *c)
             if (!ovl_vertex_in_b(c, T.id[q])) continue;
             int qp = (q + 2) % 3;
             ovl_tri_full(&T);
+            if (OVL_PLACES_BUILD && c->rec) ovl_cusps_of(c, c->st_a[T.id[q]] / OVL_V_NODE - 1);
             ovl_cusp(c, T.p[q], T.e[q], T.m[q], T.nu, 0);
             ovl_cusp(c, T.p[q], v3_scale(T.e[qp], PD_R(-1)), T.m[qp], T.nu, 0);
         }
@@ -385,6 +488,7 @@ PD_FN void ovl_pass(ovl_ctx *c)
         for (int q = 0; q < 3; q++) {
             if (!(c->st_b[id[q]] & OVL_V_INSIDE)) continue;
             int qp = (q + 2) % 3;
+            if (OVL_PLACES_BUILD && c->rec) ovl_cusps_of(c, c->st_b[id[q]] / OVL_V_NODE - 1);
             ovl_cusp(c, U.p[q], U.e[q], U.m[q], U.nu, 1);
             ovl_cusp(c, U.p[q], v3_scale(U.e[qp], PD_R(-1)), U.m[qp], U.nu, 1);
         }
@@ -417,10 +521,13 @@ PD_FN void ovl_miss(ovl_out *o, const ovl_ctx *c)
     o->centroid = o->normal = v3(0, 0, 0);
     o->depth = PD_R(0);
     o->area = PD_R(0);
+    o->places = 0;
+    o->vol_eff = o->depth_eff = PD_R(0);
 }
 
-/* Writes o as the kernels' 12-real result record: hit, degenerate, kept_a, kept_b, volume,
- * centroid[3], normal[3], depth (read back by ovl_result_unpack on the host). */
+/* Writes o as the kernels' OVL_OUT_LEN-real result record: hit, degenerate, kept_a, kept_b,
+ * volume, centroid[3], normal[3], depth, places, vol_eff, depth_eff (read back by
+ * ovl_result_unpack on the host). */
 PD_FN void ovl_out_store(PD_GLOBAL pd_real *r, const ovl_out *o)
 {
     r[0] = (pd_real)o->hit;
@@ -435,6 +542,9 @@ PD_FN void ovl_out_store(PD_GLOBAL pd_real *r, const ovl_out *o)
     r[9] = o->normal.y;
     r[10] = o->normal.z;
     r[11] = o->depth;
+    r[12] = (pd_real)o->places;
+    r[13] = o->vol_eff;
+    r[14] = o->depth_eff;
 }
 
 /* The cusp sums of one configuration: both of a degenerate one's passes averaged. */
@@ -470,6 +580,182 @@ PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
     s->mom = v3_add(s->mom, v3_scale(c->origin, s->vol));
 }
 
+/* Order of crossing nodes for ovl_places: by edge (key, then higher end), then along it. */
+PD_FN int ovl_node_before(PD_GLOBAL const int *key, PD_GLOBAL const int *end,
+                          PD_GLOBAL const pd_real *lam, int x, int y)
+{
+    if (key[x] != key[y]) return key[x] < key[y];
+    if (end[x] != end[y]) return end[x] < end[y];
+    return lam[x] < lam[y];
+}
+
+/* Node of vertex v (side 0: of A, 1: of B) when it lies inside the other solid, else -1. */
+PD_FN int ovl_vertex_node(const ovl_ctx *c, int side, int v)
+{
+    int st = side ? c->st_b[v] : c->st_a[v];
+    return (st & OVL_V_INSIDE) ? st / OVL_V_NODE - 1 : -1;
+}
+
+/* Whether any of the m crossings listed in ord (sorted by ovl_node_before) lies on edge
+ * (k, e): binary search. */
+PD_FN int ovl_edge_crossed(PD_GLOBAL const int *key, PD_GLOBAL const int *end,
+                           PD_GLOBAL const int *ord, int m, int k, int e)
+{
+    int lo = 0, up = m;
+    while (lo < up) {
+        int mid = (lo + up) / 2, x = ord[mid];
+        if (key[x] < k || (key[x] == k && end[x] < e))
+            lo = mid + 1;
+        else
+            up = mid;
+    }
+    return lo < m && key[ord[lo]] == k && end[ord[lo]] == e;
+}
+
+/*
+ * OVL_PLACES (thesis section 5.4): splits the overlap into its connected places and gives the
+ * force law the volume and depth that make it the sum of each place's own (o->vol_eff, depth_eff).
+ *
+ * The surface of A n B is a graph whose vertices are the nodes: pieces of edges lying inside the
+ * other solid join consecutive nodes along an edge, and a segment where two faces cross joins the
+ * two crossings of a triangle pair (joined as they are found, ovl_crossing_node). Its connected
+ * components are the places. Along an edge the crossings are sorted from the lower end, and a
+ * piece is inside when either of its ends says so (a vertex inside, or a crossing heading in that
+ * way): where rounding made the two disagree, joining keeps the pair's single-place behaviour.
+ * An edge with both ends inside and no crossing joins its ends. (A place could in principle be
+ * joined only through the middle of a face, a ring of one face inside the other solid; it is then
+ * counted as two. That takes a solid curved around a flat face, rare among DEM particles.)
+ *
+ * Each place k has its volume V_k (its nodes' cusps: a closed part of the boundary sums to its
+ * own volume), its own normal n_k (eq. 4.19 over its own cusps) and its depth d_k, the extent of
+ * its nodes along n_k: a thin place tilted against the pair's normal n is as thin along n_k as it
+ * is, where along n its width would count. Eq. 4.16's force grows as sqrt(V d) and eqs.
+ * 4.17-4.18's stiffnesses as sqrt(V / d); a place pushes along n_k, so along n its force counts
+ * with c_k = n_k . n and its stiffness with c_k^2. With S1 = sum sqrt(V_k d_k) c_k and
+ * S2 = sum sqrt(V_k / d_k) c_k^2, the volume S1 S2 and depth S1 / S2 give eqs. 4.16-4.18 along n
+ * exactly the places' summed force and normal stiffness (the tangential stiffness follows the
+ * normal one's form). Places whose volume is round-off (the same bound as a contact's) are not
+ * counted.
+ *
+ * A degenerate pair's places are those of its first pass (B displaced by +eps w), whose nodes
+ * already give the depth: volumes are continuous in the displacement, so that pass's are exact;
+ * its normals are not (a face shared with the other solid counts on one side), so every place of
+ * a degenerate pair takes the pair's normal.
+ */
+PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
+{
+    o->places = 1;
+    o->vol_eff = o->volume;
+    o->depth_eff = o->depth;
+    if (!OVL_PLACES_BUILD || !c->places || c->pts_overflow || c->npts < 2) return;
+    PD_GLOBAL int *key = ovl_ndi(c, OVL_ND_KEY), *end = ovl_ndi(c, OVL_ND_END),
+                  *fl = ovl_ndi(c, OVL_ND_FL), *par = ovl_ndi(c, OVL_ND_PAR),
+                  *ord = ovl_ndi(c, OVL_ND_ORD);
+    PD_GLOBAL pd_real *lam = ovl_ndr(c, OVL_ND_LAM);
+    /* the vertices' nodes as the first pass found them (a later pass, degenerate or summed again,
+     * tested them again): cleared on every near triangle, then set from the vertex nodes */
+    for (int side = 0; side < 2; side++) {
+        int nt = side ? c->nb : c->na;
+        PD_GLOBAL int *st = side ? c->st_b : c->st_a;
+        for (int k = 0; k < nt; k++) {
+            PD_GLOBAL const int *v =
+                side ? c->in->tb + 3 * c->near_b[k] : c->in->ta + 3 * c->near_a[k];
+            for (int q = 0; q < 3; q++)
+                st[v[q]] &= OVL_V_READY;
+        }
+    }
+    int m = 0; /* the crossings, listed in ord */
+    for (int x = 0; x < c->npts; x++) {
+        if (end[x] >= 0) {
+            ord[m++] = x;
+        } else {
+            PD_GLOBAL int *st = (key[x] & 1) ? c->st_b : c->st_a;
+            st[key[x] >> 1] |= OVL_V_INSIDE | (x + 1) * OVL_V_NODE;
+        }
+    }
+    for (int gap = m > 64 ? m / 2 : 1; gap > 0; gap = gap == 2 ? 1 : gap * 5 / 11) {
+        for (int i = gap; i < m; i++) { /* Shell sort, as ovl_sort */
+            int x = ord[i], j = i;
+            for (; j >= gap && ovl_node_before(key, end, lam, x, ord[j - gap]); j -= gap)
+                ord[j] = ord[j - gap];
+            ord[j] = x;
+        }
+    }
+    /* along each crossed edge, from its lower end */
+    for (int g = 0; g < m;) {
+        int k = key[ord[g]], e = end[ord[g]], side = k & 1;
+        int prev = ovl_vertex_node(c, side, k >> 1), prev_in = prev >= 0, last = -1;
+        for (; g < m && key[ord[g]] == k && end[ord[g]] == e; g++) {
+            int x = ord[g];
+            if (last >= 0 && lam[x] == lam[last]) {
+                ovl_union(par, x, last); /* the same crossing, from the edge's other face */
+                continue;
+            }
+            if (prev >= 0 && (prev_in || !fl[x])) ovl_union(par, prev, x);
+            prev = last = x;
+            prev_in = fl[x];
+        }
+        int ve = ovl_vertex_node(c, side, e);
+        if (ve >= 0 && prev >= 0) ovl_union(par, prev, ve);
+    }
+    /* edges wholly inside */
+    for (int side = 0; side < 2; side++) {
+        int nt = side ? c->nb : c->na;
+        for (int k = 0; k < nt; k++) {
+            PD_GLOBAL const int *v =
+                side ? c->in->tb + 3 * c->near_b[k] : c->in->ta + 3 * c->near_a[k];
+            for (int q = 0; q < 3; q++) {
+                int i = v[q], j = v[(q + 1) % 3];
+                int ni = ovl_vertex_node(c, side, i), nj = ovl_vertex_node(c, side, j);
+                if (ni < 0 || nj < 0) continue;
+                if (!ovl_edge_crossed(key, end, ord, m, 2 * (i < j ? i : j) + side, i < j ? j : i))
+                    ovl_union(par, ni, nj);
+            }
+        }
+    }
+    /* each place's volume and eq. 4.19 vector, summed into its root's (the smallest index) */
+    PD_GLOBAL pd_real *vol = ovl_ndr(c, OVL_ND_VOL), *elo = ovl_ndr(c, OVL_ND_LO),
+                      *ehi = ovl_ndr(c, OVL_ND_HI), *ar = ovl_ndr(c, OVL_ND_AREA);
+    for (int x = 0; x < c->npts; x++) {
+        int r = ovl_find(par, x);
+        if (r == x) continue;
+        vol[r] += vol[x];
+        v3_store(ar, r, v3_add(v3_load(ar, r), v3_load(ar, x)));
+    }
+    /* its own normal, unless the pair is degenerate (the first pass's faces shared with the
+     * other solid count on one side only; the pair's normal averages both passes) */
+    for (int x = 0; x < c->npts; x++) {
+        if (par[x] != x) continue;
+        pd_v3 a = v3_load(ar, x);
+        pd_real an = v3_norm(a);
+        v3_store(ar, x, an > PD_R(0) && !c->degenerate ? v3_scale(a, PD_R(1) / an) : o->normal);
+        elo[x] = PD_REAL_MAX;
+        ehi[x] = -PD_REAL_MAX;
+    }
+    for (int x = 0; x < c->npts; x++) { /* its depth: its nodes' extent along its normal */
+        int r = ovl_find(par, x);
+        pd_real s = v3_dot(v3_load(c->pts, x), v3_load(ar, r));
+        elo[r] = pd_min(elo[r], s);
+        ehi[r] = pd_max(ehi[r], s);
+    }
+    pd_real s1 = PD_R(0), s2 = PD_R(0), floor = PD_R(100) * PD_EPS * vol_abs;
+    int places = 0;
+    for (int x = 0; x < c->npts; x++) {
+        pd_real v = vol[x], d = ehi[x] - elo[x], cs = v3_dot(v3_load(ar, x), o->normal);
+        if (par[x] != x || !(v > floor) || !(d > PD_R(0))) continue;
+        places++;
+        /* a place pushes along its own normal: its force's part along the pair's (cs), and its
+         * stiffness along the pair's normal (cs^2) */
+        cs = cs > PD_R(0) ? cs : PD_R(0);
+        s1 += PD_SQRT(v * d) * cs;
+        s2 += PD_SQRT(v / d) * cs * cs;
+    }
+    if (places < 2 || !(s1 > PD_R(0)) || !(s2 > PD_R(0))) return;
+    o->places = places;
+    o->vol_eff = s1 * s2;
+    o->depth_eff = s1 / s2;
+}
+
 /* The overlap of A and B: volume, centroid, normal and depth (section 4.2). */
 PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
 {
@@ -491,6 +777,12 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->ucache = c->pts + 3 * in->pts_cap;
     c->npts = c->pts_overflow = 0;
     c->store_pts = 1;
+    /* OVL_PLACES: its scratch follows the usual */
+    c->places = OVL_PLACES_BUILD && (in->flags & OVL_PLACES) != 0;
+    c->rec = c->inode = 0;
+    c->cur_node = -1;
+    c->nd_i = in->iscr + ovl_iscratch_len(in->nta, in->ntb, in->nva, in->nvb);
+    c->nd_r = in->rscr + ovl_rscratch_len(in->nva, in->nvb, in->ntb, in->pts_cap);
     c->flip = c->degenerate = c->depth_mode = 0;
     c->pad = c->tol2 = c->tol3 = PD_R(0);
     c->ka = c->kb = c->na = c->nb = 0;
@@ -745,6 +1037,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         ovl_pass(c);
     }
     o->depth = c->hi > c->lo ? c->hi - c->lo : PD_R(0);
+    ovl_places(c, o, sm.vol_abs);
 }
 
 #endif /* PD_OVERLAP_H */

@@ -42,8 +42,25 @@
  * Set by np_wall_local (narrow_phase.h).
  */
 #define OVL_OPEN_B 4
+/*
+ * Find the overlap's separate places (thesis section 5.4): the connected parts of A n B, with
+ * each one's volume and depth along the pair's normal (ovl_out.places, vol_eff, depth_eff). Needs
+ * ovl_places_ilen/_rlen(pts_cap) more scratch after the usual (see ovl_compute).
+ */
+#define OVL_PLACES 8
+/*
+ * OVL_PLACES is compiled in unless the includer defines OVL_PLACES_BUILD to 0: the engine builds
+ * its kernels so when no interaction of a scenario asks for separate places, and their overlap
+ * then costs what it did before places existed (the bookkeeping otherwise adds about 4 % of
+ * instructions to every overlap, bench/RESULTS.md). The flag is ignored in such a build.
+ */
+#ifndef OVL_PLACES_BUILD
+#define OVL_PLACES_BUILD 1
+#endif
 /* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals. */
 #define OVL_TRI_CACHE 18
+/* Reals in a kernel's result record (ovl_out_store; OVL_RESULT_LEN on the host). */
+#define OVL_OUT_LEN 15
 
 /* Input of one overlap computation. Scratch sizes: see ovl_iscratch_len / ovl_rscratch_len. */
 typedef struct ovl_in {
@@ -77,6 +94,13 @@ typedef struct ovl_out {
     pd_v3 centroid; /* centre of mass of the overlap, A's frame */
     pd_v3 normal;   /* unit, from A into B (eq. 4.19), A's frame */
     pd_real depth;  /* extent of the overlap along normal */
+    /*
+     * OVL_PLACES: the number of separate places of the overlap (ovl_places), and the volume and
+     * depth that give eqs. 4.16-4.18 the sums of each place's own force and stiffnesses. Without
+     * the flag, or when more than pts_cap nodes leave the places unknown: 1, volume and depth.
+     */
+    int places;
+    pd_real vol_eff, depth_eff;
     /* half the norm of eq. 4.19's vector (A's faces inside B minus B's inside A): the contact
      * area of a thin overlap; a host diagnostic (bench/contacts), not in the kernels' record */
     pd_real area;
@@ -90,11 +114,21 @@ PD_FN int ovl_rscratch_len(int nva, int nvb, int ntb, int pts_cap)
 {
     return nva + nvb + 3 * nva + 3 * nvb + 3 * pts_cap + OVL_TRI_CACHE * ntb;
 }
+/* Scratch that OVL_PLACES needs beyond the above, at the end of each (per node kept). */
+PD_FN int ovl_places_ilen(int pts_cap)
+{
+    return 5 * pts_cap;
+}
+PD_FN int ovl_places_rlen(int pts_cap)
+{
+    return 7 * pts_cap;
+}
 
 /* Vertex state bits (per pass). */
 #define OVL_V_READY 1  /* B only: transformed into A's frame */
 #define OVL_V_TESTED 2 /* inside test done in this pass */
 #define OVL_V_INSIDE 4 /* inside the other polyhedron */
+#define OVL_V_NODE 8   /* bits from here: 1 + the index of the vertex's node in this pass */
 
 typedef struct ovl_ctx {
     const ovl_in *in;
@@ -110,6 +144,19 @@ typedef struct ovl_ctx {
     int origin_in_b;          /* OVL_OPEN_B: A's centroid inside the wall; -1 not yet known */
     PD_GLOBAL pd_real *proj_a, *proj_b, *vat, *vbt, *pts, *ucache;
     int npts, pts_overflow, store_pts;
+    /*
+     * OVL_PLACES. Every node gets an index in the order a pass emits them (inode counts; a pass
+     * without flip emits the same nodes in the same order). Per stored node, in pts_cap-long
+     * arrays at nd_i and nd_r (ovl_ndi, ovl_ndr): key (2 * vertex + side, or for a crossing
+     * 2 * the edge's lower end + side, with the edge's higher end in end, else -1), fl (1: the
+     * crossing heads into the other solid towards the higher end), lam (its position along the
+     * edge from the lower end), par (union-find), and the sums of its cusps: vol, and area (eq.
+     * 4.19's vector, 3 reals); lo, hi and ord are ovl_places's work. cur_node: the node whose
+     * cusps are being added; -1 none.
+     */
+    int places, rec, inode, cur_node; /* rec: this pass records the nodes' volumes */
+    PD_GLOBAL int *nd_i;
+    PD_GLOBAL pd_real *nd_r;
     pd_real pad;        /* OVL_SNAP * L: the configuration's length resolution */
     pd_real tol2, tol3; /* snap bounds for determinants of length^2 and length^3 */
     int flip;           /* 0: B displaced by +eps w, 1: by -eps w */
@@ -126,6 +173,18 @@ typedef struct ovl_ctx {
     pd_v3 n;
     pd_real lo, hi;
 } ovl_ctx;
+
+/* The per-node arrays of OVL_PLACES (ovl_ctx): ints and reals. */
+enum { OVL_ND_KEY, OVL_ND_END, OVL_ND_FL, OVL_ND_PAR, OVL_ND_ORD };
+enum { OVL_ND_VOL, OVL_ND_LAM, OVL_ND_LO, OVL_ND_HI, OVL_ND_AREA }; /* AREA: 3 per node */
+PD_FN PD_GLOBAL int *ovl_ndi(const ovl_ctx *c, int k)
+{
+    return c->nd_i + k * c->in->pts_cap;
+}
+PD_FN PD_GLOBAL pd_real *ovl_ndr(const ovl_ctx *c, int k)
+{
+    return c->nd_r + k * c->in->pts_cap;
+}
 
 /* Relative size below which a determinant is rounding noise: its inputs carry a few ulps from the
  * pose transform and the determinant adds about ten more; 64 ulps leaves a margin. */

@@ -5,6 +5,7 @@
  * returns TEST_DONE(). Each assertion prints the expression with expected and actual values on
  * failure; each test prints one line "ok NAME" or "FAIL NAME"; the last line of a test program is
  * "N passed, N failed", which tests/run.sh sums into the suite's closing line.
+ * TEST_ONLY="name1 name2" in the environment runs only the tests named (for working on one).
  */
 #ifndef PD_TEST_H
 #define PD_TEST_H
@@ -12,13 +13,26 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 static int test_passed_, test_failed_, test_cur_failed_;
+
+/* Whether TEST_ONLY leaves test `name` out (a whole word of the list). */
+static inline int test_skipped_(const char *name)
+{
+    const char *only = getenv("TEST_ONLY");
+    if (!only || !*only) return 0;
+    size_t n = strlen(name);
+    for (const char *p = strstr(only, name); p; p = strstr(p + 1, name))
+        if ((p == only || p[-1] == ' ') && (p[n] == ' ' || p[n] == 0)) return 0;
+    return 1;
+}
 
 #define TEST(name) static void name(void)
 
 #define RUN(name)                                                                                  \
     do {                                                                                           \
+        if (test_skipped_(#name)) break;                                                           \
         test_cur_failed_ = 0;                                                                      \
         name();                                                                                    \
         if (test_cur_failed_) {                                                                    \

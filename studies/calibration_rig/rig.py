@@ -111,8 +111,10 @@ def base_scenario(a, doors_open):
             "wall": {"density": 7800, "youngs_modulus": 1e8, "poisson_ratio": 0.25,
                      "shear_modulus": 2e7}},
         "interactions": [
-            {"between": ["rock", "rock"], "friction": 0.39, "damping": 0.453619},
-            {"between": ["rock", "wall"], "friction": 0.35, "damping": 0.382097}],
+            {"between": ["rock", "rock"], "friction": 0.39, "damping": 0.453619,
+             "contact_places": a.contact_places},
+            {"between": ["rock", "wall"], "friction": 0.35, "damping": 0.382097,
+             "contact_places": a.contact_places}],
         "shapes": {"rock": {"builtin": "rock", "triangles": a.triangles, "seed": 1}},
         "walls": walls,
     }
@@ -376,6 +378,8 @@ def main():
     ap.add_argument("--particles", type=int, default=400)
     ap.add_argument("--duration", type=float, default=1.3, help="s of phase 2")
     ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--contact-places", default="merged", choices=["merged", "separate"],
+                    help="thesis section 5.4: one contact per pair, or one per place")
     ap.add_argument("--band", type=float, nargs=2, default=[10, 45])
     ap.add_argument("--min-height", type=float, default=0.035, help="m, the pile's top")
     ap.add_argument("--max-creep", type=float, default=0.0025,

@@ -20,9 +20,30 @@ if near 0.5 "$(json_num "$tmp/o1" volume)" 1e-12 && near 0.25 "$(json_num "$tmp/
 else bad overlap_offset_cubes "$(cat "$tmp/o1")"; fi
 
 # 2. the contract's key order and full precision
-if grep -Eq '^\{"volume": [-0-9.e]+, "centroid": \[[^]]*\], "normal": \[[^]]*\], "depth": [-0-9.e]+\}$' "$tmp/o1"; then
+# (then the places, added later: "places": n, "effective_volume": m^3, "effective_depth": m)
+if grep -Eq '^\{"volume": [-0-9.e]+, "centroid": \[[^]]*\], "normal": \[[^]]*\], "depth": [-0-9.e]+, "places": [0-9]+, "effective_volume": [-0-9.e]+, "effective_depth": [-0-9.e]+\}$' "$tmp/o1"; then
     ok overlap_json_shape
 else bad overlap_json_shape "$(cat "$tmp/o1")"; fi
+
+# 2b. separate places (thesis section 5.4): two unit cubes in one mesh, 1 m apart, pressed 0.25 m
+# into a slab: V = 0.5, depth 0.25 and two places of V_k = d_k = 0.25, so sum sqrt(V_k d_k) = 0.5
+# and sum sqrt(V_k / d_k) = 2 give the effective volume 0.5 x 2 = 1 and depth 0.5 / 2 = 0.25
+box_obj() { # X0 Y0 Z0 X1 Y1 Z1 FIRST: a box's 8 vertices and 12 outward triangles, OBJ numbering
+    awk -v x0="$1" -v y0="$2" -v z0="$3" -v x1="$4" -v y1="$5" -v z1="$6" -v o="$7" 'BEGIN {
+        for (i = 0; i < 8; i++)
+            printf "v %s %s %s\n", (i % 2 ? x1 : x0), (int(i / 2) % 2 ? y1 : y0), (i >= 4 ? z1 : z0)
+        n = split("1 3 2 2 3 4 5 6 7 6 8 7 1 2 5 2 6 5 3 7 4 4 7 8 1 5 3 3 5 7 2 4 6 4 8 6", t, " ")
+        for (k = 1; k <= n; k += 3)
+            printf "f %d %d %d\n", t[k] + o, t[k + 1] + o, t[k + 2] + o }'
+}
+{ box_obj 0 0 0 1 1 1 0; box_obj 2 0 0 3 1 1 8; } >"$tmp/two.obj"
+box_obj -1 -1 -1 4 2 0 0 >"$tmp/slab.obj"
+$POLYDEM overlap "$tmp/two.obj" "$tmp/slab.obj" --pose-b "0 0 0.25 1 0 0 0" >"$tmp/o2b" 2>&1
+if near 0.5 "$(json_num "$tmp/o2b" volume)" 1e-12 && [ "$(json_num "$tmp/o2b" places)" = 2 ] &&
+    near 1 "$(json_num "$tmp/o2b" effective_volume)" 1e-12 &&
+    near 0.25 "$(json_num "$tmp/o2b" effective_depth)" 1e-12; then
+    ok overlap_separate_places
+else bad overlap_separate_places "$(cat "$tmp/o2b")"; fi
 
 # 3. apart: exactly {"volume": 0}
 $POLYDEM overlap builtin:cube builtin:cube --pose-b "2 0 0 1 0 0 0" >"$tmp/o3"

@@ -1,5 +1,6 @@
 #!/bin/sh
-# test_kernels_cl12.sh - every kernel program compiles as strict OpenCL C 1.2 in both precisions.
+# test_kernels_cl12.sh - every kernel program compiles as strict OpenCL C 1.2 in both precisions,
+# and those with the overlap also without its separate places (OVL_PLACES_BUILD=0, the default).
 # NVIDIA's driver compiles OpenCL C 1.2 (its OpenCL 3.0 has no generic address space), while
 # PoCL on the test machines accepts OpenCL C 3.0: a pointer passed to the wrong address space
 # builds here and fails on a GPU. Checked with the clang that PoCL itself depends on (Debian's
@@ -11,15 +12,26 @@ if [ -z "$cc" ]; then
     done_tests
     exit 1
 fi
+cl12() { # FILE OPTIONS...: strict OpenCL C 1.2 with the drivers' defines
+    f=$1
+    shift
+    "$cc" -x cl -cl-std=CL1.2 -Xclang -finclude-default-header -D__OPENCL_VERSION__=120 \
+        -Xclang -cl-ext=+cl_khr_fp64 -Ikernels "$@" "$f"
+}
 for f in kernels/*.cl; do
+    # the programs that contain the overlap (through their headers) have both builds
+    builds=1
+    cl12 "$f" -DPD_DOUBLE=1 -E 2>/dev/null | grep -q ovl_compute && builds="1 0"
     for d in 0 1; do
-        name="$(basename "$f") PD_DOUBLE=$d"
-        if "$cc" -x cl -cl-std=CL1.2 -Xclang -finclude-default-header -D__OPENCL_VERSION__=120 \
-            -Xclang -cl-ext=+cl_khr_fp64 -DPD_DOUBLE=$d -Ikernels -fsyntax-only "$f" >"$tmp/log" 2>&1; then
-            ok "$name"
-        else
-            bad "$name" "$(grep -m 3 error "$tmp/log")"
-        fi
+        for p in $builds; do
+            name="$(basename "$f") PD_DOUBLE=$d"
+            [ "$p" = 1 ] || name="$name OVL_PLACES_BUILD=0"
+            if cl12 "$f" -DPD_DOUBLE=$d -DOVL_PLACES_BUILD=$p -fsyntax-only >"$tmp/log" 2>&1; then
+                ok "$name"
+            else
+                bad "$name" "$(grep -m 3 error "$tmp/log")"
+            fi
+        done
     done
 done
 done_tests

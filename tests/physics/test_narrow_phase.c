@@ -166,7 +166,8 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
     /* the same pairs through the OpenCL kernel: the host build's numbers to 1e-12 (double) */
     pd_device *dev = NULL;
     pd_error err = {0};
-    double x[3 * NBODY], q[4 * NBODY], size[NBODY], *dout = malloc(sizeof(double) * 12 * npairs);
+    double x[3 * NBODY], q[4 * NBODY], size[NBODY],
+        *dout = malloc(sizeof(double) * OVL_RESULT_LEN * npairs);
     int shape[NBODY];
     for (int i = 0; i < NBODY; i++) {
         x[3 * i] = b[i].x.x;
@@ -183,7 +184,7 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
     } else {
         int agree = 1;
         for (int k = 0; k < npairs; k++) {
-            const double *h = host + 12 * k, *d = dout + 12 * k;
+            const double *h = host + 12 * k, *d = dout + OVL_RESULT_LEN * k;
             agree &= h[0] == d[0];
             for (int c = 4; c < 12; c++)
                 agree &= fabs(h[c] - d[c]) <= 1e-12 * (fabs(h[c]) + (c == 4 ? 0 : b[0].size));

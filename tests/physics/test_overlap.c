@@ -13,6 +13,7 @@
 #include "polydem.h"
 #include "ref_overlap.h"
 #include "test.h"
+#include "u_shape.h"
 
 static const double PI = 3.14159265358979323846;
 
@@ -635,6 +636,99 @@ TEST(corner_into_face_at_small_depths)
     pd_mesh_destroy(c);
 }
 
+/* ---- separate places (thesis section 5.4, OVL_PLACES) -----------------------------------------
+ */
+
+/* S1 = sum sqrt(V_k d_k), S2 = sum sqrt(V_k / d_k) of single-place contacts (ovl_places). */
+static void places_sums(const pd_contact *c, int n, double *vol_eff, double *depth_eff)
+{
+    double s1 = 0, s2 = 0;
+    for (int k = 0; k < n; k++) {
+        s1 += sqrt(c[k].volume * c[k].depth);
+        s2 += sqrt(c[k].volume / c[k].depth);
+    }
+    *vol_eff = s1 * s2;
+    *depth_eff = s1 / s2;
+}
+
+/*
+ * A U standing on a slightly tilted slab touches it in two places, one under each prong, 10 and
+ * 14 mm deep. The independent computation: each prong alone (a box, one place) against the same
+ * slab, whose overlaps with the U's are the same solids. The U's overlap must find the two places
+ * and give volume V1 + V2, and effective volume and depth from S1 and S2 of those two (ovl_places;
+ * 1e-10: the cusps of one solid summed in two orders and over two different meshes). Pressed in
+ * past the U's crotch (z = 1), the overlap is one connected U itself: one place, its effective
+ * volume and depth exactly its volume and depth.
+ */
+TEST(separate_places_of_a_u_on_a_tilted_slab)
+{
+    pd_mesh *u = u_shape_mesh();
+    pd_mesh *slab = box(-1, -1, -1, 4, 4, 0);
+    pd_mesh *prong[2] = {box(0, 0, 0, 1, U_LY, 1), box(2, 0, 0, 3, U_LY, 1)};
+    if (!u) return;
+    double a = 0.002; /* tilt about y, rad: the slab's top rises towards +x */
+    pd_pose ps = pose(0, 0, 0.008, cos(a / 2), 0, -sin(a / 2), 0);
+    pd_contact c = overlap(u, ORIGIN, slab, ps, 0), one[2];
+    for (int k = 0; k < 2; k++) {
+        one[k] = overlap(prong[k], ORIGIN, slab, ps, 0);
+        CHECK(one[k].hit && one[k].places == 1);
+    }
+    double ve, de;
+    places_sums(one, 2, &ve, &de);
+    printf("  U: V %.6e m^3, depth %.4g m, %d places: effective V %.6e m^3, depth %.4g m\n",
+           c.volume, c.depth, c.places, c.effective_volume, c.effective_depth);
+    CHECK(c.hit);
+    CHECK_EQ_INT(2, c.places);
+    CHECK_REL(one[0].volume + one[1].volume, c.volume, 1e-10);
+    CHECK_REL(ve, c.effective_volume, 1e-10);
+    CHECK_REL(de, c.effective_depth, 1e-10);
+    CHECK_REL(fmax(one[0].depth, one[1].depth), c.depth, 1e-10);
+    pd_contact f = overlap(u, ORIGIN, slab, ps, PD_OVERLAP_SINGLE);
+    CHECK_EQ_INT(2, f.places);
+    CHECK_REL(ve, f.effective_volume, 1e-4); /* single_precision_close_to_double's bound */
+    CHECK_REL(de, f.effective_depth, 1e-4);
+
+    pd_pose deep = pose(0, 0, 1.2, cos(a / 2), 0, -sin(a / 2), 0);
+    pd_contact d = overlap(u, ORIGIN, slab, deep, 0);
+    CHECK(d.hit);
+    CHECK_EQ_INT(1, d.places);
+    CHECK(d.effective_volume == d.volume && d.effective_depth == d.depth);
+    pd_mesh_destroy(u);
+    pd_mesh_destroy(slab);
+    pd_mesh_destroy(prong[0]);
+    pd_mesh_destroy(prong[1]);
+}
+
+/*
+ * Places are a property of the overlap, not of which solid is A: random poses of two U's (many
+ * touch in two or three places) give the same count and effective volume and depth with A and B
+ * swapped, though the nodes are then found from the other solid's edges (1e-9, as the depth in
+ * swap_gives_same_volume_and_opposite_normal). A single place keeps volume and depth exactly.
+ */
+TEST(places_agree_when_the_solids_swap)
+{
+    pd_mesh *u = u_shape_mesh();
+    if (!u) return;
+    int hits = 0, multi = 0;
+    for (int trial = 0; trial < 150; trial++) {
+        pd_pose pa = near_pose(0.1), pb = near_pose(2.2);
+        pd_contact ab = overlap(u, pa, u, pb, 0), ba = overlap(u, pb, u, pa, 0);
+        CHECK_EQ_INT(ab.hit, ba.hit);
+        if (!ab.hit || !ba.hit) continue;
+        hits++;
+        multi += ab.places > 1;
+        CHECK(ab.places >= 1);
+        CHECK_EQ_INT(ab.places, ba.places);
+        CHECK_REL(ab.effective_volume, ba.effective_volume, 1e-9);
+        CHECK_REL(ab.effective_depth, ba.effective_depth, 1e-9);
+        if (ab.places == 1)
+            CHECK(ab.effective_volume == ab.volume && ab.effective_depth == ab.depth);
+    }
+    printf("  %d overlaps, %d of them in several places\n", hits, multi);
+    CHECK(hits > 40 && multi > 5); /* the trials must exercise several places */
+    pd_mesh_destroy(u);
+}
+
 TEST(opencl_kernel_agrees_with_host)
 {
     pd_device *dev = NULL;
@@ -662,6 +756,9 @@ TEST(opencl_kernel_agrees_with_host)
             CHECK_VEC(h.centroid[0], h.centroid[1], h.centroid[2], c.centroid, 1e-12);
             CHECK_VEC(h.normal[0], h.normal[1], h.normal[2], c.normal, 1e-12);
             CHECK_REL(h.depth, c.depth, 1e-12);
+            CHECK_EQ_INT(h.places, c.places);
+            CHECK_REL(h.effective_volume, c.effective_volume, 1e-12);
+            CHECK_REL(h.effective_depth, c.effective_depth, 1e-12);
             if (pd_overlap_cl(dev, m, &pa, m, &pb, PD_OVERLAP_SINGLE, &c, &err) == PD_OK)
                 CHECK_REL(h.volume, c.volume, 2e-3);
         }
@@ -702,6 +799,8 @@ int main(void)
     RUN(icosphere_overlap_converges_to_spherical_caps);
     RUN(single_precision_close_to_double);
     RUN(corner_into_face_at_small_depths);
+    RUN(separate_places_of_a_u_on_a_tilted_slab);
+    RUN(places_agree_when_the_solids_swap);
     RUN(opencl_kernel_agrees_with_host);
     RUN(bad_pose_is_an_error_not_a_nan);
     return TEST_DONE();

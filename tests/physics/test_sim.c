@@ -10,6 +10,7 @@
 #include "sim.h"
 #include "grid_box.h"
 #include "test.h"
+#include "u_shape.h"
 
 static pd_device *dev;
 static const double PI = 3.14159265358979323846;
@@ -243,6 +244,59 @@ TEST(cube_rests_flat_on_wall)
     printf("  resting depth %.9g m (theory %.9g m)\n", depth, want);
     CHECK_NEAR(want, depth, 1e-3 * want);
     finish(&r);
+}
+
+/*
+ * Thesis section 5.4, "contact_places": a U (tests/u_shape.h, size 0.02 m) standing on its two
+ * prongs on a box floor. At rest each prong tip, a flat contact of area A = 2.5 k^2 (k the mesh's
+ * scale), carries m g / 2. Pressed separately, eq. 4.16 with V = A delta per place gives
+ *   m g / 2 = 4/(3 sqrt(pi)) E* sqrt(A) delta  ->  delta = 3 sqrt(pi) m g / (8 E* sqrt(A)).
+ * Merged into one contact (the thesis's model, "merged"), V = 2 A delta over the same depth:
+ *   m g = 4/(3 sqrt(pi)) E* sqrt(2 A) delta  ->  delta sqrt(2) times deeper.
+ * Both are checked to cube_rests_flat_on_wall's 0.1 % after 60 periods of the stiffer mode.
+ */
+static double u_rest_depth(const char *places, double want)
+{
+    double d = 0.02, k = cbrt(PI * d * d * d / 6 / U_VOLUME), estar = 1e7 / (2 * (1 - 0.25 * 0.25));
+    double m = 2600 * PI * d * d * d / 6, area = U_LY * k * k;
+    double kn = 2 * 2 * estar * sqrt(area / PI); /* eq. 4.17, both places at V/delta = A */
+    double period = 2 * PI * sqrt(m / kn), dt = period / 100;
+    char shape[2000], json[4000];
+    u_shape_json(shape, sizeof shape);
+    snprintf(json, sizeof json,
+             "{\"name\": \"u\", \"allow_unstable_dt\": true,"
+             " \"time\": {\"dt\": %.17g, \"duration\": 1, \"output_interval\": 1},"
+             " \"gravity\": [0, 0, -9.81],"
+             " \"materials\": {\"m\": {\"density\": 2600, \"youngs_modulus\": 1e7, "
+             "\"poisson_ratio\": 0.25}},"
+             " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": 0.5, \"damping\": "
+             "0.5, \"contact_places\": \"%s\"}],"
+             " \"shapes\": {\"u\": %s},"
+             " \"particles\": [{\"shape\": \"u\", \"material\": \"m\", \"list\": ["
+             " {\"position\": [0, 0, %.17g], \"size\": %g}]}],"
+             " \"walls\": [{\"name\": \"floor\", \"material\": \"m\", "
+             "\"box\": {\"min\": [-1, -1, -0.1], \"max\": [1, 1, 0]}}]}",
+             dt, places, shape, U_CENTROID_Z * k - want, d);
+    run r;
+    if (start(&r, json)) return -1;
+    for (int i = 0; i < 6000; i++)
+        if (step(&r)) break;
+    double x[3];
+    get(&r, r.m->x, 3, x);
+    finish(&r);
+    return U_CENTROID_Z * k - x[2];
+}
+
+TEST(u_rests_on_two_separate_places)
+{
+    double d = 0.02, k = cbrt(PI * d * d * d / 6 / U_VOLUME), estar = 1e7 / (2 * (1 - 0.25 * 0.25));
+    double m = 2600 * PI * d * d * d / 6, area = U_LY * k * k;
+    double want = 3 * sqrt(PI) * m * 9.81 / (8 * estar * sqrt(area));
+    double sep = u_rest_depth("separate", want), mer = u_rest_depth("merged", sqrt(2) * want);
+    printf("  resting depth: separate %.9g m (theory %.9g m), merged %.9g m (theory %.9g m)\n", sep,
+           want, mer, sqrt(2) * want);
+    CHECK_NEAR(want, sep, 1e-3 * want);
+    CHECK_NEAR(sqrt(2) * want, mer, 1e-3 * sqrt(2) * want);
 }
 
 /* Seed 004 A.6: a cube launched along a floor at u0 slides u0^2 / (2 mu g) before it stops.
@@ -1067,6 +1121,7 @@ int main(void)
     RUN(sphere_settles_on_floor);
     RUN(sphere_settles_on_a_finely_meshed_floor);
     RUN(cube_rests_flat_on_wall);
+    RUN(u_rests_on_two_separate_places);
     RUN(cube_slides_to_rest);
     RUN(cube_slides_on_a_finely_meshed_floor);
     RUN(particle_inside_wall_is_refused);

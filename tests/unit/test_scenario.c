@@ -143,6 +143,7 @@ TEST(defaults)
     CHECK_NEAR(0.25, s->mat[0].poisson_ratio, 0);
     CHECK_NEAR(0.5, s->inter[0].friction, 0);
     CHECK_EQ_INT(SC_MODEL_HERTZ_MINDLIN, s->inter[0].model);
+    CHECK_EQ_INT(0, s->inter[0].separate_places); /* "merged", the thesis's model */
     CHECK_NEAR(0.01 / 100, s->output_interval, 1e-18);
     CHECK_NEAR(0.01 / 1000, s->stats_interval, 1e-18);
     CHECK_NEAR(1, s->group[0].orientation[0], 0);
@@ -222,6 +223,19 @@ TEST(errors_name_the_field)
                  "\"interactions\": [{\"between\": [\"rock\", \"rock\"], \"model\": \"linear\"}],"
                  "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
                  "/interactions/0/normal_stiffness", "required");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"], \"contact_places\": "
+                 "\"apart\"}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/interactions/0/contact_places",
+                 "must be \"merged\" or \"separate\", got \"apart\"");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"], \"model\": \"linear\", "
+                 "\"normal_stiffness\": 1e4, \"contact_places\": \"separate\"}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/interactions/0/contact_places", "is for \"model\": \"hertz_mindlin\"");
     expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
                  "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
                  "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
