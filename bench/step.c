@@ -17,10 +17,12 @@
  * level's frontier size), and checks that both find the same number of candidate pairs.
  *
  * --no-skin builds the pair list every step (the engine's default reuses it until a particle has
- * moved half the Verlet skin, a tenth of the smallest particle).
+ * moved half the Verlet skin, a tenth of the smallest particle). --places presses each place of
+ * a contact on its own ("contact_places": "separate", docs/SCENARIO.md).
  *
  * usage: build/bench/step [--quick] [--sizes N,N,...] [--spheres N] [--settle S] [--steps S]
  *                         [--device N] [--single] [--wall-grid G] [--traversal] [--no-skin]
+ *                         [--places]
  */
 #include <stdio.h>
 #include <stdlib.h>
@@ -33,6 +35,7 @@
 
 static int traversal;      /* also time DFS against BFS traversal */
 static int no_skin;        /* build the pair list every step (no Verlet skin) */
+static int places;         /* "contact_places": "separate" */
 static int wall_grid;      /* 0: a box floor */
 static char wall_path[64]; /* the meshed floor, when wall_grid */
 
@@ -76,14 +79,15 @@ static void scenario(char *json, size_t len, long n, int spheres, int dbl)
              " \"w\": {\"density\": 7800, \"youngs_modulus\": 1e9, \"poisson_ratio\": 0.25, "
              "\"shear_modulus\": 1e9}},"
              " \"interactions\": [{\"between\": [\"p\", \"p\"], \"friction\": 0.39, \"damping\": "
-             "0.453619}, {\"between\": [\"p\", \"w\"], \"friction\": 0.35, \"damping\": "
-             "0.382097}],"
+             "0.453619, \"contact_places\": \"%s\"}, {\"between\": [\"p\", \"w\"], \"friction\": "
+             "0.35, \"damping\": 0.382097, \"contact_places\": \"%s\"}],"
              " \"shapes\": {\"s\": %s},"
              " \"particles\": [{\"shape\": \"s\", \"material\": \"p\", \"count\": %ld, \"size\": "
              "%g, \"region\": {\"min\": [0, 0, 0.001], \"max\": [%.9g, %.9g, %.9g]}, "
              "\"orientation\": \"random\", \"velocity\": [0, 0, -1]}],"
              " \"walls\": [{\"name\": \"floor\", \"material\": \"w\", %s}]}",
-             dbl ? "double" : "single",
+             dbl ? "double" : "single", places ? "separate" : "merged",
+             places ? "separate" : "merged",
              spheres ? "{\"sphere\": {}}" : "{\"builtin\": \"schonhardt\"}", n, size, w, w,
              0.001 + h, floor);
 }
@@ -350,6 +354,8 @@ int main(int argc, char **argv)
             device = atoi(argv[++i]);
         } else if (!strcmp(argv[i], "--single")) {
             dbl = 0;
+        } else if (!strcmp(argv[i], "--places")) {
+            places = 1;
         } else if (!strcmp(argv[i], "--no-skin")) {
             no_skin = 1;
         } else if (!strcmp(argv[i], "--traversal")) {
@@ -357,11 +363,11 @@ int main(int argc, char **argv)
         } else if (!strcmp(argv[i], "--wall-grid") && i + 1 < argc) {
             wall_grid = atoi(argv[++i]);
         } else {
-            fprintf(
-                stderr,
-                "usage: %s [--quick] [--sizes N,N] [--spheres N] [--settle S] "
-                "[--steps S] [--device N] [--single] [--wall-grid G] [--traversal] [--no-skin]\n",
-                argv[0]);
+            fprintf(stderr,
+                    "usage: %s [--quick] [--sizes N,N] [--spheres N] [--settle S] "
+                    "[--steps S] [--device N] [--single] [--wall-grid G] [--traversal] [--no-skin] "
+                    "[--places]\n",
+                    argv[0]);
             return 2;
         }
     }
@@ -373,8 +379,10 @@ int main(int argc, char **argv)
         return 1;
     }
     if (dbl && !pd_device_has_fp64(dev)) dbl = 0;
-    printf("device: %s, %s precision, dt 1e-5 s, %d settling steps, %d timed, floor: ",
-           pd_device_name(dev), dbl ? "double" : "single", settle, steps);
+    printf("device: %s, %s precision, contact places %s, dt 1e-5 s, %d settling steps, %d timed, "
+           "floor: ",
+           pd_device_name(dev), dbl ? "double" : "single", places ? "separate" : "merged", settle,
+           steps);
     if (wall_grid)
         printf("%d x %d grids (%d triangles)\n", wall_grid, wall_grid, 12 * wall_grid * wall_grid);
     else
