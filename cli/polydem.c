@@ -32,10 +32,11 @@ static const char *usage_text =
     "              [--no-filter] [--device N]\n"
     "      exact overlap of two closed meshes (STL, OBJ or builtin:NAME); prints\n"
     "      {\"volume\": m^3, \"centroid\": [m], \"normal\": [unit, A into B], \"depth\": m,\n"
-    "       \"places\": n, \"effective_volume\": m^3, \"effective_depth\": m}\n"
+    "       \"places\": n, \"effective_volume\": m^3, \"effective_depth\": m,\n"
+    "       \"effective_point\": [m]}\n"
     "      or {\"volume\": 0} when they do not overlap. Poses default to \"0 0 0 1 0 0 0\".\n"
     "      places: the overlap's separate parts; effective_*: what \"contact_places\":\n"
-    "      \"separate\" gives the force law (docs/SCENARIO.md).\n"
+    "      \"separate\" gives the force law, and where its force acts (docs/SCENARIO.md).\n"
     "  mesh-info FILE|builtin:NAME[:TRIANGLES[:SEED]]\n"
     "      triangles, vertices, volume, centroid, inertia and principal moments\n"
     "      (inertia per unit density, m^5 = kg m^2 at 1 kg/m^3)\n"
@@ -159,8 +160,10 @@ static int cmd_overlap(int argc, char **argv)
         print_vec("centroid", c.centroid, 0);
         print_vec("normal", c.normal, 0);
         printf("\"depth\": %.17g, \"places\": %d, ", c.depth, c.places);
-        printf("\"effective_volume\": %.17g, \"effective_depth\": %.17g}\n", c.effective_volume,
+        printf("\"effective_volume\": %.17g, \"effective_depth\": %.17g, ", c.effective_volume,
                c.effective_depth);
+        print_vec("effective_point", c.effective_point, 1);
+        printf("}\n");
     }
     rc = 0;
 done:

@@ -442,6 +442,8 @@ void ovl_result_unpack(const double r[OVL_RESULT_LEN], ovl_result *o)
     o->places = (int)r[12];
     o->vol_eff = r[13];
     o->depth_eff = r[14];
+    for (int k = 0; k < 3; k++)
+        o->point_eff[k] = r[15 + k];
 }
 
 int pd_overlap_cl(pd_device *dev, const pd_mesh *a, const pd_pose *pa, const pd_mesh *b,

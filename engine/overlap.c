@@ -134,13 +134,15 @@ void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *ou
     out->effective_volume = r->vol_eff;
     out->effective_depth = r->depth_eff;
     for (int i = 0; i < 3; i++) {
-        double c = s->xa[i], n = 0;
+        double c = s->xa[i], n = 0, pe = s->xa[i];
         for (int k = 0; k < 3; k++) {
             c += s->ra[i][k] * (r->centroid[k] + s->ca_mesh[k]);
             n += s->ra[i][k] * r->normal[k];
+            pe += s->ra[i][k] * (r->point_eff[k] + s->ca_mesh[k]);
         }
         out->centroid[i] = c;
         out->normal[i] = n;
+        out->effective_point[i] = pe;
     }
 }
 

@@ -29,10 +29,11 @@ typedef struct ovl_result {
     double volume, centroid[3], normal[3], depth;
     int places;                /* OVL_PLACES (always asked for by ovl_run_*): separate places */
     double vol_eff, depth_eff; /* the force law's volume and depth over them (ovl_places) */
+    double point_eff[3];       /* where their summed force acts, A's frame */
 } ovl_result;
 
 /* Reals in a kernel's result record (OVL_OUT_LEN in kernels/overlap_predicates.h). */
-#define OVL_RESULT_LEN 15
+#define OVL_RESULT_LEN 18
 
 /* Runs the host build of the kernel. Returns PD_OK or PD_ENOMEM. */
 int ovl_run_f64(const ovl_setup *s, ovl_result *r);

@@ -144,6 +144,7 @@ typedef struct pd_contact {
      */
     int places;
     double effective_volume, effective_depth;
+    double effective_point[3]; /* where the places' summed force acts (force-weighted), m */
 } pd_contact;
 
 /* Overlap of A at pose pa with B at pose pb, computed on the host by the kernel's own code. */

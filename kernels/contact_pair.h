@@ -484,8 +484,9 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         }
         np_to_world(&a, ra, &o);
         n = o.normal;
-        c = o.centroid;
-        /* one place: depth and volume; several (OVL_PLACES): their forces' and stiffnesses' sum */
+        /* one place: centroid, depth and volume; several (OVL_PLACES): where their summed force
+         * acts, and the volume and depth that give that sum and their stiffnesses' */
+        c = o.point_eff;
         delta = o.depth_eff;
         vol = o.vol_eff;
         volumetric = 1;

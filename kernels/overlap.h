@@ -42,6 +42,11 @@ PD_FN void ovl_cusp(ovl_ctx *c, pd_v3 p, pd_v3 t, pd_v3 n, pd_v3 nu, int on_b)
      */
     pd_v3 cen = v3_sub(v3_sub(v3_scale(p, PD_R(3)), v3_scale(t, PD_R(2) * tp)), v3_scale(n, np));
     c->moment = v3_add(c->moment, v3_scale(cen, vol * PD_R(0.25)));
+    if (OVL_PLACES_BUILD && c->cur_node >= 0) {
+        PD_GLOBAL pd_real *mo = ovl_ndr(c, OVL_ND_MOM);
+        v3_store(mo, c->cur_node,
+                 v3_add(v3_load(mo, c->cur_node), v3_scale(cen, vol * PD_R(0.25))));
+    }
     if (on_b)
         c->area_b = v3_add(c->area_b, v3_scale(nu, area));
     else
@@ -92,6 +97,7 @@ PD_FN int ovl_node_key(ovl_ctx *c, int idx, int key, int end, int fl, pd_real la
     if (c->rec) {
         ovl_ndr(c, OVL_ND_VOL)[idx] = PD_R(0);
         v3_store(ovl_ndr(c, OVL_ND_AREA), idx, v3(0, 0, 0));
+        v3_store(ovl_ndr(c, OVL_ND_MOM), idx, v3(0, 0, 0));
         c->cur_node = idx;
     }
     return 1;
@@ -523,10 +529,11 @@ PD_FN void ovl_miss(ovl_out *o, const ovl_ctx *c)
     o->area = PD_R(0);
     o->places = 0;
     o->vol_eff = o->depth_eff = PD_R(0);
+    o->point_eff = v3(0, 0, 0);
 }
 
 /* Writes o as the kernels' OVL_OUT_LEN-real result record: hit, degenerate, kept_a, kept_b,
- * volume, centroid[3], normal[3], depth, places, vol_eff, depth_eff (read back by
+ * volume, centroid[3], normal[3], depth, places, vol_eff, depth_eff, point_eff[3] (read back by
  * ovl_result_unpack on the host). */
 PD_FN void ovl_out_store(PD_GLOBAL pd_real *r, const ovl_out *o)
 {
@@ -545,6 +552,9 @@ PD_FN void ovl_out_store(PD_GLOBAL pd_real *r, const ovl_out *o)
     r[12] = (pd_real)o->places;
     r[13] = o->vol_eff;
     r[14] = o->depth_eff;
+    r[15] = o->point_eff.x;
+    r[16] = o->point_eff.y;
+    r[17] = o->point_eff.z;
 }
 
 /* The cusp sums of one configuration: both of a degenerate one's passes averaged. */
@@ -634,8 +644,9 @@ PD_FN int ovl_edge_crossed(PD_GLOBAL const int *key, PD_GLOBAL const int *end,
  * with c_k = n_k . n and its stiffness with c_k^2. With S1 = sum sqrt(V_k d_k) c_k and
  * S2 = sum sqrt(V_k / d_k) c_k^2, the volume S1 S2 and depth S1 / S2 give eqs. 4.16-4.18 along n
  * exactly the places' summed force and normal stiffness (the tangential stiffness follows the
- * normal one's form). Places whose volume is round-off (the same bound as a contact's) are not
- * counted.
+ * normal one's form). The summed force acts at the places' centroids weighted by their forces
+ * (o->point_eff), so that its torque is theirs. Places whose volume is round-off (the same bound
+ * as a contact's) are not counted.
  *
  * A degenerate pair's places are those of its first pass (B displaced by +eps w), whose nodes
  * already give the depth: volumes are continuous in the displacement, so that pass's are exact;
@@ -647,6 +658,7 @@ PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
     o->places = 1;
     o->vol_eff = o->volume;
     o->depth_eff = o->depth;
+    o->point_eff = o->centroid;
     if (!OVL_PLACES_BUILD || !c->places || c->pts_overflow || c->npts < 2) return;
     PD_GLOBAL int *key = ovl_ndi(c, OVL_ND_KEY), *end = ovl_ndi(c, OVL_ND_END),
                   *fl = ovl_ndi(c, OVL_ND_FL), *par = ovl_ndi(c, OVL_ND_PAR),
@@ -715,12 +727,14 @@ PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
     }
     /* each place's volume and eq. 4.19 vector, summed into its root's (the smallest index) */
     PD_GLOBAL pd_real *vol = ovl_ndr(c, OVL_ND_VOL), *elo = ovl_ndr(c, OVL_ND_LO),
-                      *ehi = ovl_ndr(c, OVL_ND_HI), *ar = ovl_ndr(c, OVL_ND_AREA);
+                      *ehi = ovl_ndr(c, OVL_ND_HI), *ar = ovl_ndr(c, OVL_ND_AREA),
+                      *mo = ovl_ndr(c, OVL_ND_MOM);
     for (int x = 0; x < c->npts; x++) {
         int r = ovl_find(par, x);
         if (r == x) continue;
         vol[r] += vol[x];
         v3_store(ar, r, v3_add(v3_load(ar, r), v3_load(ar, x)));
+        v3_store(mo, r, v3_add(v3_load(mo, r), v3_load(mo, x)));
     }
     /* its own normal, unless the pair is degenerate (the first pass's faces shared with the
      * other solid count on one side only; the pair's normal averages both passes) */
@@ -739,6 +753,7 @@ PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
         ehi[r] = pd_max(ehi[r], s);
     }
     pd_real s1 = PD_R(0), s2 = PD_R(0), floor = PD_R(100) * PD_EPS * vol_abs;
+    pd_v3 fm = v3(0, 0, 0); /* sum of each place's force times its centroid (about origin) */
     int places = 0;
     for (int x = 0; x < c->npts; x++) {
         pd_real v = vol[x], d = ehi[x] - elo[x], cs = v3_dot(v3_load(ar, x), o->normal);
@@ -747,13 +762,16 @@ PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
         /* a place pushes along its own normal: its force's part along the pair's (cs), and its
          * stiffness along the pair's normal (cs^2) */
         cs = cs > PD_R(0) ? cs : PD_R(0);
-        s1 += PD_SQRT(v * d) * cs;
+        pd_real f = PD_SQRT(v * d) * cs;
+        s1 += f;
         s2 += PD_SQRT(v / d) * cs * cs;
+        fm = v3_add(fm, v3_scale(v3_load(mo, x), f / v));
     }
     if (places < 2 || !(s1 > PD_R(0)) || !(s2 > PD_R(0))) return;
     o->places = places;
     o->vol_eff = s1 * s2;
     o->depth_eff = s1 / s2;
+    o->point_eff = v3_add(c->origin, v3_scale(fm, PD_R(1) / s1));
 }
 
 /* The overlap of A and B: volume, centroid, normal and depth (section 4.2). */

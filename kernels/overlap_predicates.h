@@ -60,7 +60,7 @@
 /* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals. */
 #define OVL_TRI_CACHE 18
 /* Reals in a kernel's result record (ovl_out_store; OVL_RESULT_LEN on the host). */
-#define OVL_OUT_LEN 15
+#define OVL_OUT_LEN 18
 
 /* Input of one overlap computation. Scratch sizes: see ovl_iscratch_len / ovl_rscratch_len. */
 typedef struct ovl_in {
@@ -101,6 +101,7 @@ typedef struct ovl_out {
      */
     int places;
     pd_real vol_eff, depth_eff;
+    pd_v3 point_eff; /* where the places' summed force acts (their force-weighted centroids) */
     /* half the norm of eq. 4.19's vector (A's faces inside B minus B's inside A): the contact
      * area of a thin overlap; a host diagnostic (bench/contacts), not in the kernels' record */
     pd_real area;
@@ -121,7 +122,7 @@ PD_FN int ovl_places_ilen(int pts_cap)
 }
 PD_FN int ovl_places_rlen(int pts_cap)
 {
-    return 7 * pts_cap;
+    return 10 * pts_cap;
 }
 
 /* Vertex state bits (per pass). */
@@ -150,8 +151,9 @@ typedef struct ovl_ctx {
      * arrays at nd_i and nd_r (ovl_ndi, ovl_ndr): key (2 * vertex + side, or for a crossing
      * 2 * the edge's lower end + side, with the edge's higher end in end, else -1), fl (1: the
      * crossing heads into the other solid towards the higher end), lam (its position along the
-     * edge from the lower end), par (union-find), and the sums of its cusps: vol, and area (eq.
-     * 4.19's vector, 3 reals); lo, hi and ord are ovl_places's work. cur_node: the node whose
+     * edge from the lower end), par (union-find), and the sums of its cusps: vol, area (eq.
+     * 4.19's vector) and mom (first moment about origin), 3 reals each; lo, hi and ord are
+     * ovl_places's work. cur_node: the node whose
      * cusps are being added; -1 none.
      */
     int places, rec, inode, cur_node; /* rec: this pass records the nodes' volumes */
@@ -176,7 +178,8 @@ typedef struct ovl_ctx {
 
 /* The per-node arrays of OVL_PLACES (ovl_ctx): ints and reals. */
 enum { OVL_ND_KEY, OVL_ND_END, OVL_ND_FL, OVL_ND_PAR, OVL_ND_ORD };
-enum { OVL_ND_VOL, OVL_ND_LAM, OVL_ND_LO, OVL_ND_HI, OVL_ND_AREA }; /* AREA: 3 per node */
+enum { OVL_ND_VOL, OVL_ND_LAM, OVL_ND_LO, OVL_ND_HI, OVL_ND_AREA, OVL_ND_MOM = OVL_ND_AREA + 3 };
+/* (AREA and MOM: 3 reals per node) */
 PD_FN PD_GLOBAL int *ovl_ndi(const ovl_ctx *c, int k)
 {
     return c->nd_i + k * c->in->pts_cap;

@@ -20,14 +20,16 @@ if near 0.5 "$(json_num "$tmp/o1" volume)" 1e-12 && near 0.25 "$(json_num "$tmp/
 else bad overlap_offset_cubes "$(cat "$tmp/o1")"; fi
 
 # 2. the contract's key order and full precision
-# (then the places, added later: "places": n, "effective_volume": m^3, "effective_depth": m)
-if grep -Eq '^\{"volume": [-0-9.e]+, "centroid": \[[^]]*\], "normal": \[[^]]*\], "depth": [-0-9.e]+, "places": [0-9]+, "effective_volume": [-0-9.e]+, "effective_depth": [-0-9.e]+\}$' "$tmp/o1"; then
+# (then the places, added later: "places": n, "effective_volume": m^3, "effective_depth": m,
+# "effective_point": [m])
+if grep -Eq '^\{"volume": [-0-9.e]+, "centroid": \[[^]]*\], "normal": \[[^]]*\], "depth": [-0-9.e]+, "places": [0-9]+, "effective_volume": [-0-9.e]+, "effective_depth": [-0-9.e]+, "effective_point": \[[^]]*\]\}$' "$tmp/o1"; then
     ok overlap_json_shape
 else bad overlap_json_shape "$(cat "$tmp/o1")"; fi
 
 # 2b. separate places (thesis section 5.4): two unit cubes in one mesh, 1 m apart, pressed 0.25 m
 # into a slab: V = 0.5, depth 0.25 and two places of V_k = d_k = 0.25, so sum sqrt(V_k d_k) = 0.5
-# and sum sqrt(V_k / d_k) = 2 give the effective volume 0.5 x 2 = 1 and depth 0.5 / 2 = 0.25
+# and sum sqrt(V_k / d_k) = 2 give the effective volume 0.5 x 2 = 1 and depth 0.5 / 2 = 0.25; equal
+# forces act midway between the places' centroids, at x = 1.5
 box_obj() { # X0 Y0 Z0 X1 Y1 Z1 FIRST: a box's 8 vertices and 12 outward triangles, OBJ numbering
     awk -v x0="$1" -v y0="$2" -v z0="$3" -v x1="$4" -v y1="$5" -v z1="$6" -v o="$7" 'BEGIN {
         for (i = 0; i < 8; i++)
@@ -41,7 +43,8 @@ box_obj -1 -1 -1 4 2 0 0 >"$tmp/slab.obj"
 $POLYDEM overlap "$tmp/two.obj" "$tmp/slab.obj" --pose-b "0 0 0.25 1 0 0 0" >"$tmp/o2b" 2>&1
 if near 0.5 "$(json_num "$tmp/o2b" volume)" 1e-12 && [ "$(json_num "$tmp/o2b" places)" = 2 ] &&
     near 1 "$(json_num "$tmp/o2b" effective_volume)" 1e-12 &&
-    near 0.25 "$(json_num "$tmp/o2b" effective_depth)" 1e-12; then
+    near 0.25 "$(json_num "$tmp/o2b" effective_depth)" 1e-12 &&
+    near 1.5 "$(json_num "$tmp/o2b" effective_point 0)" 1e-12; then
     ok overlap_separate_places
 else bad overlap_separate_places "$(cat "$tmp/o2b")"; fi
 

@@ -639,24 +639,32 @@ TEST(corner_into_face_at_small_depths)
 /* ---- separate places (thesis section 5.4, OVL_PLACES) -----------------------------------------
  */
 
-/* S1 = sum sqrt(V_k d_k), S2 = sum sqrt(V_k / d_k) of single-place contacts (ovl_places). */
-static void places_sums(const pd_contact *c, int n, double *vol_eff, double *depth_eff)
+/* S1 = sum sqrt(V_k d_k), S2 = sum sqrt(V_k / d_k) of single-place contacts with one normal
+ * (ovl_places), and the centroids weighted by sqrt(V_k d_k), where their summed force acts. */
+static void places_sums(const pd_contact *c, int n, double *vol_eff, double *depth_eff,
+                        double point[3])
 {
-    double s1 = 0, s2 = 0;
+    double s1 = 0, s2 = 0, m[3] = {0, 0, 0};
     for (int k = 0; k < n; k++) {
-        s1 += sqrt(c[k].volume * c[k].depth);
+        double f = sqrt(c[k].volume * c[k].depth);
+        s1 += f;
         s2 += sqrt(c[k].volume / c[k].depth);
+        for (int i = 0; i < 3; i++)
+            m[i] += f * c[k].centroid[i];
     }
     *vol_eff = s1 * s2;
     *depth_eff = s1 / s2;
+    for (int i = 0; i < 3; i++)
+        point[i] = m[i] / s1;
 }
 
 /*
  * A U standing on a slightly tilted slab touches it in two places, one under each prong, 10 and
  * 14 mm deep. The independent computation: each prong alone (a box, one place) against the same
  * slab, whose overlaps with the U's are the same solids. The U's overlap must find the two places
- * and give volume V1 + V2, and effective volume and depth from S1 and S2 of those two (ovl_places;
- * 1e-10: the cusps of one solid summed in two orders and over two different meshes). Pressed in
+ * and give volume V1 + V2, effective volume and depth from S1 and S2 of those two, and the point
+ * where their summed force acts (ovl_places; 1e-10: the cusps of one solid summed in two orders
+ * and over two different meshes). Pressed in
  * past the U's crotch (z = 1), the overlap is one connected U itself: one place, its effective
  * volume and depth exactly its volume and depth.
  */
@@ -673,8 +681,8 @@ TEST(separate_places_of_a_u_on_a_tilted_slab)
         one[k] = overlap(prong[k], ORIGIN, slab, ps, 0);
         CHECK(one[k].hit && one[k].places == 1);
     }
-    double ve, de;
-    places_sums(one, 2, &ve, &de);
+    double ve, de, pe[3];
+    places_sums(one, 2, &ve, &de, pe);
     printf("  U: V %.6e m^3, depth %.4g m, %d places: effective V %.6e m^3, depth %.4g m\n",
            c.volume, c.depth, c.places, c.effective_volume, c.effective_depth);
     CHECK(c.hit);
@@ -683,6 +691,7 @@ TEST(separate_places_of_a_u_on_a_tilted_slab)
     CHECK_REL(ve, c.effective_volume, 1e-10);
     CHECK_REL(de, c.effective_depth, 1e-10);
     CHECK_REL(fmax(one[0].depth, one[1].depth), c.depth, 1e-10);
+    CHECK_VEC(pe[0], pe[1], pe[2], c.effective_point, 1e-10);
     pd_contact f = overlap(u, ORIGIN, slab, ps, PD_OVERLAP_SINGLE);
     CHECK_EQ_INT(2, f.places);
     CHECK_REL(ve, f.effective_volume, 1e-4); /* single_precision_close_to_double's bound */
@@ -701,9 +710,9 @@ TEST(separate_places_of_a_u_on_a_tilted_slab)
 
 /*
  * Places are a property of the overlap, not of which solid is A: random poses of two U's (many
- * touch in two or three places) give the same count and effective volume and depth with A and B
- * swapped, though the nodes are then found from the other solid's edges (1e-9, as the depth in
- * swap_gives_same_volume_and_opposite_normal). A single place keeps volume and depth exactly.
+ * touch in two or three places) give the same count, effective volume, depth and point with A
+ * and B swapped, though the nodes are then found from the other solid's edges (1e-9, as the depth
+ * in swap_gives_same_volume_and_opposite_normal). A single place keeps volume and depth exactly.
  */
 TEST(places_agree_when_the_solids_swap)
 {
@@ -721,6 +730,11 @@ TEST(places_agree_when_the_solids_swap)
         CHECK_EQ_INT(ab.places, ba.places);
         CHECK_REL(ab.effective_volume, ba.effective_volume, 1e-9);
         CHECK_REL(ab.effective_depth, ba.effective_depth, 1e-9);
+        /* a place's centroid is its moment over its volume, both summed from cusps of the
+         * solids' size, so a small place's carries their rounding over its volume (1e-9 m
+         * measured on these 3 m solids) */
+        CHECK_VEC(ab.effective_point[0], ab.effective_point[1], ab.effective_point[2],
+                  ba.effective_point, 1e-8);
         if (ab.places == 1)
             CHECK(ab.effective_volume == ab.volume && ab.effective_depth == ab.depth);
     }
@@ -759,6 +773,8 @@ TEST(opencl_kernel_agrees_with_host)
             CHECK_EQ_INT(h.places, c.places);
             CHECK_REL(h.effective_volume, c.effective_volume, 1e-12);
             CHECK_REL(h.effective_depth, c.effective_depth, 1e-12);
+            CHECK_VEC(h.effective_point[0], h.effective_point[1], h.effective_point[2],
+                      c.effective_point, 1e-12);
             if (pd_overlap_cl(dev, m, &pa, m, &pb, PD_OVERLAP_SINGLE, &c, &err) == PD_OK)
                 CHECK_REL(h.volume, c.volume, 2e-3);
         }

@@ -783,7 +783,7 @@ static int cancel_at_once(const pd_progress *p, void *user)
 TEST(divergence_is_reported)
 {
     char json[3000];
-    snprintf(json, sizeof json, bed_json, "double", "");
+    snprintf(json, sizeof json, bed_json, "double", "merged", "");
     char *p = strstr(json, "2e-6");
     memcpy(p, "9e-3", 4);
     strcpy(strrchr(json, '}'), ", \"allow_unstable_dt\": true}");
