@@ -43,9 +43,10 @@
  */
 #define OVL_OPEN_B 4
 /*
- * Find the overlap's separate places (thesis section 5.4): the connected parts of A n B, with
- * each one's volume and depth along the pair's normal (ovl_out.places, vol_eff, depth_eff). Needs
- * ovl_places_ilen/_rlen(pts_cap) more scratch after the usual (see ovl_compute).
+ * Find the overlap's separate places (thesis section 5.4): the connected parts of A n B, each
+ * with its own volume, normal and depth, summed into what the force law needs (ovl_out.places,
+ * vol_eff, depth_eff, point_eff; ovl_places in overlap.h). Needs ovl_places_ilen/_rlen(pts_cap)
+ * more scratch after the usual (see ovl_compute).
  */
 #define OVL_PLACES 8
 /*
