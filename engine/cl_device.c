@@ -206,6 +206,13 @@ int cl_build_program(pd_device *dev, const char *name, const char *src, int vari
     return PD_OK;
 }
 
+/* Whether embedded program i contains the overlap (its sources carry their headers), and so
+ * has a CL_PLACES build of its own. */
+static int program_has_places(int i)
+{
+    return strstr(pd_cl_sources[i].source, "OVL_PLACES_BUILD") != NULL;
+}
+
 int cl_program_get(pd_device *dev, const char *name, int variant, cl_program *out, pd_error *err)
 {
     int dbl = variant & CL_DOUBLE;
@@ -216,8 +223,7 @@ int cl_program_get(pd_device *dev, const char *name, int variant, cl_program *ou
     int n = (int)(sizeof pd_cl_sources / sizeof pd_cl_sources[0]);
     for (int i = 0; i < n && i < CL_MAX_PROGRAMS; i++)
         if (strcmp(pd_cl_sources[i].name, name) == 0) {
-            /* the sources are embedded with their headers: one without the overlap has one build */
-            if (!strstr(pd_cl_sources[i].source, "OVL_PLACES_BUILD")) variant &= ~CL_PLACES;
+            if (!program_has_places(i)) variant &= ~CL_PLACES;
             if (!dev->cache[i][variant]) {
                 int rc = cl_build_program(dev, name, pd_cl_sources[i].source, variant,
                                           &dev->cache[i][variant], err);
@@ -234,7 +240,7 @@ int pd_device_compile_all(pd_device *dev, pd_error *err)
     for (size_t i = 0; i < sizeof pd_cl_sources / sizeof pd_cl_sources[0]; i++)
         for (int v = 0; v < 4; v++) {
             if ((v & CL_DOUBLE) && !dev->fp64) continue;
-            if ((v & CL_PLACES) && !strstr(pd_cl_sources[i].source, "OVL_PLACES_BUILD")) continue;
+            if ((v & CL_PLACES) && !program_has_places((int)i)) continue;
             cl_program p;
             int rc =
                 cl_build_program(dev, pd_cl_sources[i].name, pd_cl_sources[i].source, v, &p, err);

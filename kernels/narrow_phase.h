@@ -214,9 +214,11 @@ PD_FN void np_to_world(const np_body *a, const pd_real ra[9], ovl_out *o)
     o->centroid = v3(ra[0] * c.x + ra[1] * c.y + ra[2] * c.z + a->x.x,
                      ra[3] * c.x + ra[4] * c.y + ra[5] * c.z + a->x.y,
                      ra[6] * c.x + ra[7] * c.y + ra[8] * c.z + a->x.z);
-    o->point_eff = v3(ra[0] * e.x + ra[1] * e.y + ra[2] * e.z + a->x.x,
-                      ra[3] * e.x + ra[4] * e.y + ra[5] * e.z + a->x.y,
-                      ra[6] * e.x + ra[7] * e.y + ra[8] * e.z + a->x.z);
+    /* without places compiled in, the force point is the centroid (ovl_places) */
+    o->point_eff = !OVL_PLACES_BUILD ? o->centroid
+                                     : v3(ra[0] * e.x + ra[1] * e.y + ra[2] * e.z + a->x.x,
+                                          ra[3] * e.x + ra[4] * e.y + ra[5] * e.z + a->x.y,
+                                          ra[6] * e.x + ra[7] * e.y + ra[8] * e.z + a->x.z);
     o->normal = v3(ra[0] * n.x + ra[1] * n.y + ra[2] * n.z, ra[3] * n.x + ra[4] * n.y + ra[5] * n.z,
                    ra[6] * n.x + ra[7] * n.y + ra[8] * n.z);
 }

@@ -30,22 +30,19 @@ PD_FN void ovl_cusp(ovl_ctx *c, pd_v3 p, pd_v3 t, pd_v3 n, pd_v3 nu, int on_b)
     pd_real vol = area * hp / PD_R(3.0); /* eq. 5.10: -(1/6)(t.p)(n.p)(b.p) */
     c->vol += vol;
     c->vol_abs += PD_FABS(vol);
-    if (OVL_PLACES_BUILD && c->cur_node >= 0) { /* its node's share (ovl_places) */
-        PD_GLOBAL pd_real *ar = ovl_ndr(c, OVL_ND_AREA);
-        ovl_ndr(c, OVL_ND_VOL)[c->cur_node] += vol;
-        v3_store(ar, c->cur_node,
-                 v3_add(v3_load(ar, c->cur_node), v3_scale(nu, on_b ? -area : area)));
-    }
     /*
      * eq. 5.11: the simplex of eq. 5.8 has nodes p, p - (t.p)t, p - (t.p)t - (n.p)n and the
      * origin, so its centroid is (3p - 2(t.p)t - (n.p)n)/4 (the printed eq. 5.11 flips both signs).
      */
     pd_v3 cen = v3_sub(v3_sub(v3_scale(p, PD_R(3)), v3_scale(t, PD_R(2) * tp)), v3_scale(n, np));
-    c->moment = v3_add(c->moment, v3_scale(cen, vol * PD_R(0.25)));
-    if (OVL_PLACES_BUILD && c->cur_node >= 0) {
-        PD_GLOBAL pd_real *mo = ovl_ndr(c, OVL_ND_MOM);
-        v3_store(mo, c->cur_node,
-                 v3_add(v3_load(mo, c->cur_node), v3_scale(cen, vol * PD_R(0.25))));
+    pd_v3 mom = v3_scale(cen, vol * PD_R(0.25));
+    c->moment = v3_add(c->moment, mom);
+    if (OVL_PLACES_BUILD && c->cur_node >= 0) { /* its node's share (ovl_places) */
+        int x = c->cur_node;
+        PD_GLOBAL pd_real *ar = ovl_ndr(c, OVL_ND_AREA), *mo = ovl_ndr(c, OVL_ND_MOM);
+        ovl_ndr(c, OVL_ND_VOL)[x] += vol;
+        v3_store(ar, x, v3_add(v3_load(ar, x), v3_scale(nu, on_b ? -area : area)));
+        v3_store(mo, x, v3_add(v3_load(mo, x), mom));
     }
     if (on_b)
         c->area_b = v3_add(c->area_b, v3_scale(nu, area));
@@ -294,19 +291,21 @@ PD_FN pd_v3 ovl_cross_point(pd_v3 plo, pd_v3 phi, pd_real slo, pd_real shi)
 }
 
 /*
- * OVL_PLACES: emits the node where T's edge k (side 0: of A; 1: of B) crosses the other triangle,
- * before its cusps, and joins it to the pair's first crossing (a segment of the faces' intersection
- * joins them). sk1: the side of the edge's end k + 1. Returns the updated first crossing.
+ * Emits the node where T's edge k (side 0: of A; 1: of B) crosses the other triangle, before its
+ * cusps; with OVL_PLACES also keeps its key and joins it to the pair's first crossing (a segment
+ * of the faces' intersection joins them). sk1: the side of the edge's end k + 1. Returns the
+ * updated first crossing.
  */
 PD_FN int ovl_crossing_node(ovl_ctx *c, const ovl_tri *T, int k, int lo, pd_v3 p, const pd_real *q,
                             int sk1, int side, int first)
 {
+    int idx = ovl_node(c, p);
+    if (!(OVL_PLACES_BUILD && c->places)) return first;
     int k1 = (k + 1) % 3, hi = k + k1 - lo;
     int vlo = T->id[lo], vhi = T->id[hi];
     /* heading into the other solid towards the higher end: edge k runs k -> k1, and the other
      * solid lies away from k1's side */
     int fl = (lo == k) == (sk1 < 0);
-    int idx = ovl_node(c, p);
     if (ovl_node_key(c, idx, 2 * vlo + side, vhi, fl, ovl_cross_lam(q[lo], q[hi])) &&
         c->store_pts) {
         if (first >= 0)
@@ -391,10 +390,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         if (in != 1) continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
-        if (OVL_PLACES_BUILD && c->places)
-            first = ovl_crossing_node(c, T, k, lo, p, qa, sa[k1], 0, first);
-        else
-            ovl_node(c, p);
+        first = ovl_crossing_node(c, T, k, lo, p, qa, sa[k1], 0, first);
         pd_v3 te = v3_scale(T->e[k], (pd_real)-sa[k1]); /* into U's solid; sa is +-1 */
         ovl_crossing_cusps(c, p, te, T->m[k], T->nu, U->nu, 0);
     }
@@ -416,10 +412,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         if (in != 1) continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
-        if (OVL_PLACES_BUILD && c->places)
-            first = ovl_crossing_node(c, U, k, lo, p, qb, sb[k1], 1, first);
-        else
-            ovl_node(c, p);
+        first = ovl_crossing_node(c, U, k, lo, p, qb, sb[k1], 1, first);
         pd_v3 te = v3_scale(U->e[k], (pd_real)-sb[k1]);
         ovl_crossing_cusps(c, p, te, U->m[k], U->nu, T->nu, 1);
     }
