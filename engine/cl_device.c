@@ -223,6 +223,9 @@ int cl_program_get(pd_device *dev, const char *name, int variant, cl_program *ou
     int n = (int)(sizeof pd_cl_sources / sizeof pd_cl_sources[0]);
     for (int i = 0; i < n && i < CL_MAX_PROGRAMS; i++)
         if (strcmp(pd_cl_sources[i].name, name) == 0) {
+            /* single precision always has the places: its rescue of contacts needs them
+             * (OVL_RESCUE, kernels/overlap_predicates.h) */
+            if (!dbl) variant |= CL_PLACES;
             if (!program_has_places(i)) variant &= ~CL_PLACES;
             if (!dev->cache[i][variant]) {
                 int rc = cl_build_program(dev, name, pd_cl_sources[i].source, variant,
@@ -241,6 +244,7 @@ int pd_device_compile_all(pd_device *dev, pd_error *err)
         for (int v = 0; v < 4; v++) {
             if ((v & CL_DOUBLE) && !dev->fp64) continue;
             if ((v & CL_PLACES) && !program_has_places((int)i)) continue;
+            if (!(v & (CL_DOUBLE | CL_PLACES)) && program_has_places((int)i)) continue;
             cl_program p;
             int rc =
                 cl_build_program(dev, pd_cl_sources[i].name, pd_cl_sources[i].source, v, &p, err);
@@ -330,8 +334,9 @@ static void to_real(void *buf, const double *x, size_t n, int dbl)
 int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs, int dbl,
                double *out, pd_error *err)
 {
-    /* places (PD_OVERLAP_PLACES in s->flags) only in the build that has them */
-    int variant = (dbl ? CL_DOUBLE : 0) | ((s->flags & PD_OVERLAP_PLACES) ? CL_PLACES : 0);
+    /* places (PD_OVERLAP_PLACES in s->flags) only in the build that has them, which single
+     * precision always uses (OVL_RESCUE, kernels/overlap_predicates.h) */
+    int variant = (dbl ? CL_DOUBLE : 0) | ((s->flags & PD_OVERLAP_PLACES) || !dbl ? CL_PLACES : 0);
     int rc = device_program(dev, variant, err);
     if (rc != PD_OK) return rc;
     size_t rs = dbl ? sizeof(double) : sizeof(float);

@@ -587,6 +587,8 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->dbl = s->double_precision;
     for (int k = 0; k < s->nint; k++) /* "contact_places": "separate" (kernels/overlap.h) */
         m->places |= s->inter[k].separate_places;
+    /* single precision rescues contacts through the places (OVL_RESCUE, overlap_predicates.h) */
+    m->places |= !m->dbl;
     m->rs = m->dbl ? sizeof(double) : sizeof(float);
     m->dt = s->dt;
     m->nwall = s->nwall;

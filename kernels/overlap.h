@@ -24,7 +24,10 @@
 /* Adds the cusp (p, t, n, b = -nu) of a face with outward unit normal nu (eqs. 5.8-5.11). */
 PD_FN void ovl_cusp(ovl_ctx *c, pd_v3 p, pd_v3 t, pd_v3 n, pd_v3 nu, int on_b)
 {
-    p = v3_sub(p, c->origin); /* the simplices' common node: exact while origin is 0 */
+    pd_v3 o = c->origin; /* the simplices' common node: exact while it is 0 */
+    if (OVL_RESCUE && c->node_org && c->cur_node >= 0)
+        o = v3_load(ovl_ndr(c, OVL_ND_ORG), c->cur_node); /* its place's centre */
+    p = v3_sub(p, o);
     pd_real tp = v3_dot(t, p), np = v3_dot(n, p), hp = v3_dot(nu, p);
     pd_real area = PD_R(0.5) * tp * np;  /* eq. 5.9 */
     pd_real vol = area * hp / PD_R(3.0); /* eq. 5.10: -(1/6)(t.p)(n.p)(b.p) */
@@ -36,6 +39,8 @@ PD_FN void ovl_cusp(ovl_ctx *c, pd_v3 p, pd_v3 t, pd_v3 n, pd_v3 nu, int on_b)
      */
     pd_v3 cen = v3_sub(v3_sub(v3_scale(p, PD_R(3)), v3_scale(t, PD_R(2) * tp)), v3_scale(n, np));
     pd_v3 mom = v3_scale(cen, vol * PD_R(0.25));
+    if (OVL_RESCUE && c->node_org) /* the moment stays about c->origin */
+        mom = v3_add(mom, v3_scale(v3_sub(o, c->origin), vol));
     c->moment = v3_add(c->moment, mom);
     if (OVL_PLACES_BUILD && c->cur_node >= 0) { /* its node's share (ovl_places) */
         int x = c->cur_node;
@@ -645,14 +650,14 @@ PD_FN int ovl_edge_crossed(PD_GLOBAL const int *key, PD_GLOBAL const int *end,
  * already give the depth: volumes are continuous in the displacement, so that pass's are exact;
  * its normals are not (a face shared with the other solid counts on one side), so every place of
  * a degenerate pair takes the pair's normal.
+ *
+ * ovl_places_join joins the nodes that the first pass stored into their places (OVL_ND_PAR:
+ * ovl_find gives a node's place, named by its smallest node); ovl_places sums them.
  */
-PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
+PD_FN void ovl_places_join(ovl_ctx *c)
 {
-    o->places = 1;
-    o->vol_eff = o->volume;
-    o->depth_eff = o->depth;
-    o->point_eff = o->centroid;
-    if (!OVL_PLACES_BUILD || !c->places || c->pts_overflow || c->npts < 2) return;
+    if (c->joined) return;
+    c->joined = 1;
     PD_GLOBAL int *key = ovl_ndi(c, OVL_ND_KEY), *end = ovl_ndi(c, OVL_ND_END),
                   *fl = ovl_ndi(c, OVL_ND_FL), *par = ovl_ndi(c, OVL_ND_PAR),
                   *ord = ovl_ndi(c, OVL_ND_ORD);
@@ -718,6 +723,18 @@ PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
             }
         }
     }
+}
+
+/* The places of a hit (o filled but for them): o->places, vol_eff, depth_eff, point_eff. */
+PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
+{
+    o->places = 1;
+    o->vol_eff = o->volume;
+    o->depth_eff = o->depth;
+    o->point_eff = o->centroid;
+    if (!OVL_PLACES_BUILD || !c->places || c->pts_overflow || c->npts < 2) return;
+    ovl_places_join(c);
+    PD_GLOBAL int *par = ovl_ndi(c, OVL_ND_PAR);
     /* each place's volume and eq. 4.19 vector, summed into its root's (the smallest index) */
     PD_GLOBAL pd_real *vol = ovl_ndr(c, OVL_ND_VOL), *elo = ovl_ndr(c, OVL_ND_LO),
                       *ehi = ovl_ndr(c, OVL_ND_HI), *ar = ovl_ndr(c, OVL_ND_AREA),
@@ -767,6 +784,65 @@ PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
     o->point_eff = v3_add(c->origin, v3_scale(fm, PD_R(1) / s1));
 }
 
+/*
+ * OVL_RESCUE (single precision): a pair whose cusps, even about the centre of the nodes' box,
+ * leave its volume within their rounding is summed once more with each place's cusps about that
+ * place's own centre. Each cusp is a simplex reaching from its origin to its node, so its volume
+ * grows as the cube of that distance: for a pair touching in places a few millimetres apart, each
+ * a few hundred micrometres across, about their common centre the cusps are 10^3-10^5 times the
+ * volume, which single precision (100 ulps: 1.2e-5) cannot tell from round-off; about their own
+ * centres they are of the order of their places. A place's boundary is closed, so its cusps sum to
+ * its volume about any origin (in exact arithmetic the result is unchanged). Not for degenerate
+ * pairs (their second pass numbers its nodes differently) nor when the nodes overflowed. Returns
+ * whether sm was summed again.
+ */
+PD_FN int ovl_rescue(ovl_ctx *c, ovl_sums *sm)
+{
+    if (!OVL_RESCUE || c->degenerate || c->pts_overflow || c->npts < 2) return 0;
+    int places = c->places;
+    if (!places) { /* a pass that stores the nodes' keys and joins each pair's crossings */
+        c->places = 1;
+        c->npts = 0;
+        c->store_pts = 1;
+        ovl_pass(c);
+        c->store_pts = 0;
+        if (c->pts_overflow || c->degenerate) { /* (the same nodes as before: not expected) */
+            c->places = places;
+            return 0;
+        }
+    }
+    ovl_places_join(c);
+    PD_GLOBAL int *par = ovl_ndi(c, OVL_ND_PAR);
+    PD_GLOBAL pd_real *org = ovl_ndr(c, OVL_ND_ORG), *lo = ovl_ndr(c, OVL_ND_AREA);
+    int nplaces = 0;
+    for (int x = 0; x < c->npts; x++) { /* each place's box, at its root: lo in AREA, hi in ORG */
+        if (ovl_find(par, x) != x) continue;
+        nplaces++;
+        v3_store(lo, x, v3_load(c->pts, x));
+        v3_store(org, x, v3_load(c->pts, x));
+    }
+    if (nplaces < 2) { /* one place: its centre is the nodes' box's, as summed already */
+        c->places = places;
+        return 0;
+    }
+    for (int x = 0; x < c->npts; x++) {
+        int r = ovl_find(par, x);
+        pd_v3 p = v3_load(c->pts, x), l = v3_load(lo, r), h = v3_load(org, r);
+        v3_store(lo, r, v3(pd_min(l.x, p.x), pd_min(l.y, p.y), pd_min(l.z, p.z)));
+        v3_store(org, r, v3(pd_max(h.x, p.x), pd_max(h.y, p.y), pd_max(h.z, p.z)));
+    }
+    for (int x = 0; x < c->npts; x++) /* roots first: a root is its place's smallest node */
+        if (par[x] == x)
+            v3_store(org, x, v3_scale(v3_add(v3_load(lo, x), v3_load(org, x)), PD_R(0.5)));
+    for (int x = 0; x < c->npts; x++)
+        if (par[x] != x) v3_store(org, x, v3_load(org, ovl_find(par, x)));
+    c->node_org = 1; /* about the places' centres; the recording pass redoes the nodes' sums */
+    ovl_sum(c, sm);
+    c->node_org = 0;
+    c->places = places;
+    return 1;
+}
+
 /* The overlap of A and B: volume, centroid, normal and depth (section 4.2). */
 PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
 {
@@ -790,7 +866,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->store_pts = 1;
     /* OVL_PLACES: its scratch follows the usual */
     c->places = OVL_PLACES_BUILD && (in->flags & OVL_PLACES) != 0;
-    c->rec = c->inode = 0;
+    c->rec = c->inode = c->joined = c->node_org = 0;
     c->cur_node = -1;
     c->nd_i = in->iscr + ovl_iscratch_len(in->nta, in->ntb, in->nva, in->nvb);
     c->nd_r = in->rscr + ovl_rscratch_len(in->nva, in->nvb, in->ntb, in->pts_cap);
@@ -1008,6 +1084,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         c->store_pts = 0; /* the same nodes */
         ovl_sum(c, &sm);
     }
+    if (!(sm.vol > PD_R(100) * PD_EPS * sm.vol_abs)) ovl_rescue(c, &sm);
     pd_real vol = sm.vol, smag = sm.smag;
     pd_v3 mom = sm.mom, sdiff = sm.sdiff;
     int degenerate = c->degenerate;

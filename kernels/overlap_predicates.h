@@ -58,6 +58,14 @@
 #ifndef OVL_PLACES_BUILD
 #define OVL_PLACES_BUILD 1
 #endif
+/*
+ * In single precision the places also rescue a pair touching in places far apart, whose cusps,
+ * summed about one origin between them, are too large for its volume to stand out of their
+ * rounding (ovl_rescue in overlap.h). It needs the places' bookkeeping, so the engine builds its
+ * single-precision kernels with OVL_PLACES_BUILD (engine/cl_device.c). Double precision has
+ * 2^29 times the room and goes without.
+ */
+#define OVL_RESCUE (OVL_PLACES_BUILD && !PD_DOUBLE)
 /* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals. */
 #define OVL_TRI_CACHE 18
 /* Reals in a kernel's result record (ovl_out_store; OVL_RESULT_LEN on the host). */
@@ -123,7 +131,7 @@ PD_FN int ovl_places_ilen(int pts_cap)
 }
 PD_FN int ovl_places_rlen(int pts_cap)
 {
-    return 10 * pts_cap;
+    return 13 * pts_cap; /* OVL_ND_ORG + 3 reals per node */
 }
 
 /* Vertex state bits (per pass). */
@@ -158,6 +166,8 @@ typedef struct ovl_ctx {
      * cusps are being added; -1 none.
      */
     int places, rec, inode, cur_node; /* rec: this pass records the nodes' volumes */
+    int joined;                       /* ovl_places_join has joined the nodes into places */
+    int node_org; /* OVL_RESCUE: each node's cusps are taken about its place's centre (ORG) */
     PD_GLOBAL int *nd_i;
     PD_GLOBAL pd_real *nd_r;
     pd_real pad;        /* OVL_SNAP * L: the configuration's length resolution */
@@ -179,8 +189,16 @@ typedef struct ovl_ctx {
 
 /* The per-node arrays of OVL_PLACES (ovl_ctx): ints and reals. */
 enum { OVL_ND_KEY, OVL_ND_END, OVL_ND_FL, OVL_ND_PAR, OVL_ND_ORD };
-enum { OVL_ND_VOL, OVL_ND_LAM, OVL_ND_LO, OVL_ND_HI, OVL_ND_AREA, OVL_ND_MOM = OVL_ND_AREA + 3 };
-/* (AREA and MOM: 3 reals per node) */
+enum {
+    OVL_ND_VOL,
+    OVL_ND_LAM,
+    OVL_ND_LO,
+    OVL_ND_HI,
+    OVL_ND_AREA,
+    OVL_ND_MOM = OVL_ND_AREA + 3,
+    OVL_ND_ORG = OVL_ND_MOM + 3 /* ovl_rescue: the origin its cusps are taken about */
+};
+/* (AREA, MOM and ORG: 3 reals per node) */
 PD_FN PD_GLOBAL int *ovl_ndi(const ovl_ctx *c, int k)
 {
     return c->nd_i + k * c->in->pts_cap;
