@@ -61,9 +61,10 @@
 /*
  * In single precision the places also rescue a pair touching in places far apart, whose cusps,
  * summed about one origin between them, are too large for its volume to stand out of their
- * rounding (ovl_rescue in overlap.h). It needs the places' bookkeeping, so the engine builds its
- * single-precision kernels with OVL_PLACES_BUILD (engine/cl_device.c). Double precision has
- * 2^29 times the room and goes without.
+ * rounding (ovl_rescue in overlap.h). It needs the places' bookkeeping and their scratch
+ * (ovl_places_ilen/_rlen, whether or not OVL_PLACES is asked for), so the engine builds its
+ * single-precision kernels with OVL_PLACES_BUILD (engine/cl_device.c) and sizes their scratch so.
+ * Double precision has 2^29 times the room and goes without.
  */
 #define OVL_RESCUE (OVL_PLACES_BUILD && !PD_DOUBLE)
 /* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals. */
