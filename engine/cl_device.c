@@ -223,9 +223,6 @@ int cl_program_get(pd_device *dev, const char *name, int variant, cl_program *ou
     int n = (int)(sizeof pd_cl_sources / sizeof pd_cl_sources[0]);
     for (int i = 0; i < n && i < CL_MAX_PROGRAMS; i++)
         if (strcmp(pd_cl_sources[i].name, name) == 0) {
-            /* single precision always has the places: its rescue of contacts needs them
-             * (OVL_RESCUE, kernels/overlap_predicates.h) */
-            if (!dbl) variant |= CL_PLACES;
             if (!program_has_places(i)) variant &= ~CL_PLACES;
             if (!dev->cache[i][variant]) {
                 int rc = cl_build_program(dev, name, pd_cl_sources[i].source, variant,
@@ -244,6 +241,7 @@ int pd_device_compile_all(pd_device *dev, pd_error *err)
         for (int v = 0; v < 4; v++) {
             if ((v & CL_DOUBLE) && !dev->fp64) continue;
             if ((v & CL_PLACES) && !program_has_places((int)i)) continue;
+            /* single precision is built with the places only (cl_internal.h) */
             if (!(v & (CL_DOUBLE | CL_PLACES)) && program_has_places((int)i)) continue;
             cl_program p;
             int rc =

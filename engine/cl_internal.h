@@ -35,9 +35,9 @@ const char *cl_errstr(cl_int e);
 /*
  * A program's build variant: bit 0 double precision (PD_DOUBLE), CL_PLACES the overlap's separate
  * places compiled in (OVL_PLACES_BUILD, kernels/overlap_predicates.h; off, an overlap costs what
- * it did before them). 0 and 1 are the plain single and double builds; programs with the overlap
- * are always built with the places in single precision (cl_program_get), whose rescue of small
- * contacts needs them (OVL_RESCUE).
+ * it did before them). 0 and 1 are the plain single and double builds. Programs with the overlap
+ * are asked for in single precision only with CL_PLACES (sim_create, ovl_run_cl), whose rescue of
+ * small contacts needs them (OVL_RESCUE); the caller sizes the overlap scratch for the places.
  */
 #define CL_DOUBLE 1
 #define CL_PLACES 2

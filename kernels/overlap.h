@@ -793,12 +793,11 @@ PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
  * volume, which single precision (100 ulps: 1.2e-5) cannot tell from round-off; about their own
  * centres they are of the order of their places. A place's boundary is closed, so its cusps sum to
  * its volume about any origin (in exact arithmetic the result is unchanged). Not for degenerate
- * pairs (their second pass numbers its nodes differently) nor when the nodes overflowed. Returns
- * whether sm was summed again.
+ * pairs (their second pass numbers its nodes differently) nor when the nodes overflowed.
  */
-PD_FN int ovl_rescue(ovl_ctx *c, ovl_sums *sm)
+PD_FN void ovl_rescue(ovl_ctx *c, ovl_sums *sm)
 {
-    if (!OVL_RESCUE || c->degenerate || c->pts_overflow || c->npts < 2) return 0;
+    if (!OVL_RESCUE || c->degenerate || c->pts_overflow || c->npts < 2) return;
     int places = c->places;
     if (!places) { /* a pass that stores the nodes' keys and joins each pair's crossings */
         c->places = 1;
@@ -808,39 +807,37 @@ PD_FN int ovl_rescue(ovl_ctx *c, ovl_sums *sm)
         c->store_pts = 0;
         if (c->pts_overflow || c->degenerate) { /* (the same nodes as before: not expected) */
             c->places = places;
-            return 0;
+            return;
         }
     }
     ovl_places_join(c);
     PD_GLOBAL int *par = ovl_ndi(c, OVL_ND_PAR);
     PD_GLOBAL pd_real *org = ovl_ndr(c, OVL_ND_ORG), *lo = ovl_ndr(c, OVL_ND_AREA);
+    /* each place's box, at its root (lo in AREA, hi in ORG); a root is its place's smallest node,
+     * so these ascending loops meet it before the place's other nodes */
     int nplaces = 0;
-    for (int x = 0; x < c->npts; x++) { /* each place's box, at its root: lo in AREA, hi in ORG */
-        if (ovl_find(par, x) != x) continue;
-        nplaces++;
-        v3_store(lo, x, v3_load(c->pts, x));
-        v3_store(org, x, v3_load(c->pts, x));
-    }
-    if (nplaces < 2) { /* one place: its centre is the nodes' box's, as summed already */
-        c->places = places;
-        return 0;
-    }
     for (int x = 0; x < c->npts; x++) {
         int r = ovl_find(par, x);
-        pd_v3 p = v3_load(c->pts, x), l = v3_load(lo, r), h = v3_load(org, r);
+        pd_v3 p = v3_load(c->pts, x), l = r == x ? p : v3_load(lo, r),
+              h = r == x ? p : v3_load(org, r);
+        nplaces += r == x;
         v3_store(lo, r, v3(pd_min(l.x, p.x), pd_min(l.y, p.y), pd_min(l.z, p.z)));
         v3_store(org, r, v3(pd_max(h.x, p.x), pd_max(h.y, p.y), pd_max(h.z, p.z)));
     }
-    for (int x = 0; x < c->npts; x++) /* roots first: a root is its place's smallest node */
-        if (par[x] == x)
-            v3_store(org, x, v3_scale(v3_add(v3_load(lo, x), v3_load(org, x)), PD_R(0.5)));
-    for (int x = 0; x < c->npts; x++)
-        if (par[x] != x) v3_store(org, x, v3_load(org, ovl_find(par, x)));
+    if (nplaces < 2) { /* one place: its centre is the nodes' box's, as summed already */
+        c->places = places;
+        return;
+    }
+    for (int x = 0; x < c->npts; x++) { /* its centre, for every node of it */
+        int r = ovl_find(par, x);
+        v3_store(org, x,
+                 r == x ? v3_scale(v3_add(v3_load(lo, x), v3_load(org, x)), PD_R(0.5))
+                        : v3_load(org, r));
+    }
     c->node_org = 1; /* about the places' centres; the recording pass redoes the nodes' sums */
     ovl_sum(c, sm);
     c->node_org = 0;
     c->places = places;
-    return 1;
 }
 
 /* The overlap of A and B: volume, centroid, normal and depth (section 4.2). */

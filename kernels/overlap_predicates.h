@@ -125,14 +125,26 @@ PD_FN int ovl_rscratch_len(int nva, int nvb, int ntb, int pts_cap)
 {
     return nva + nvb + 3 * nva + 3 * nvb + 3 * pts_cap + OVL_TRI_CACHE * ntb;
 }
+/* The per-node arrays of OVL_PLACES (ovl_ctx, ovl_ndi, ovl_ndr): ints and reals. */
+enum { OVL_ND_KEY, OVL_ND_END, OVL_ND_FL, OVL_ND_PAR, OVL_ND_ORD, OVL_ND_INTS };
+enum {
+    OVL_ND_VOL,
+    OVL_ND_LAM,
+    OVL_ND_LO,
+    OVL_ND_HI,
+    OVL_ND_AREA, /* 3 per node, as MOM and ORG */
+    OVL_ND_MOM = OVL_ND_AREA + 3,
+    OVL_ND_ORG = OVL_ND_MOM + 3, /* ovl_rescue: the origin its cusps are taken about */
+    OVL_ND_REALS = OVL_ND_ORG + 3
+};
 /* Scratch that OVL_PLACES needs beyond the above, at the end of each (per node kept). */
 PD_FN int ovl_places_ilen(int pts_cap)
 {
-    return 5 * pts_cap;
+    return OVL_ND_INTS * pts_cap;
 }
 PD_FN int ovl_places_rlen(int pts_cap)
 {
-    return 13 * pts_cap; /* OVL_ND_ORG + 3 reals per node */
+    return OVL_ND_REALS * pts_cap;
 }
 
 /* Vertex state bits (per pass). */
@@ -188,18 +200,6 @@ typedef struct ovl_ctx {
     pd_real lo, hi;
 } ovl_ctx;
 
-/* The per-node arrays of OVL_PLACES (ovl_ctx): ints and reals. */
-enum { OVL_ND_KEY, OVL_ND_END, OVL_ND_FL, OVL_ND_PAR, OVL_ND_ORD };
-enum {
-    OVL_ND_VOL,
-    OVL_ND_LAM,
-    OVL_ND_LO,
-    OVL_ND_HI,
-    OVL_ND_AREA,
-    OVL_ND_MOM = OVL_ND_AREA + 3,
-    OVL_ND_ORG = OVL_ND_MOM + 3 /* ovl_rescue: the origin its cusps are taken about */
-};
-/* (AREA, MOM and ORG: 3 reals per node) */
 PD_FN PD_GLOBAL int *ovl_ndi(const ovl_ctx *c, int k)
 {
     return c->nd_i + k * c->in->pts_cap;
