@@ -20,6 +20,7 @@ typedef struct ovl_setup {
     double rot[9], tr[3];                   /* B's frame -> A's frame */
     double ca[3], cb[3];                    /* centroids in A's frame */
     int flags;
+    double org[3]; /* OVL_ORIGIN in flags: the first sum's origin, A's frame */
     /* A's frame -> world: world = ra * (p + ca_mesh) + xa */
     double ra[3][3], ca_mesh[3], xa[3];
 } ovl_setup;
@@ -121,6 +122,7 @@ static inline void ovl_in_from_setup(ovl_in *in, const ovl_setup *s, const pd_re
     in->ca = v3((pd_real)s->ca[0], (pd_real)s->ca[1], (pd_real)s->ca[2]);
     in->cb = v3((pd_real)s->cb[0], (pd_real)s->cb[1], (pd_real)s->cb[2]);
     in->flags = flags;
+    in->org = v3((pd_real)s->org[0], (pd_real)s->org[1], (pd_real)s->org[2]);
     wb_tree_none(&in->wall);
     in->iscr = iscr;
     in->rscr = rscr;

@@ -35,6 +35,8 @@ enum { SIM_INTEGRATE, SIM_BVH, SIM_TRAVERSE, SIM_CONTACTS, SIM_GATHER, SIM_NSTAG
 
 typedef struct sim_pairs {
     cl_mem keys, spring, kt;
+    cl_mem
+        point;  /* contact point (world) of the last step: the next overlap's origin (OVL_ORIGIN) */
     size_t cap; /* capacity in pairs */
 } sim_pairs;
 
@@ -102,7 +104,7 @@ typedef struct sim {
      */
     sim_pairs pairs, carry;
     int npairs;
-    cl_mem force, point, info, second_list;
+    cl_mem force, info, second_list;
     cl_mem second_count, second_off; /* per particle: contacts as second body, their offsets */
     size_t work_cap;                 /* capacity of the per-pair work arrays above */
     /* overlap scratch, per contact work-item */

@@ -68,16 +68,19 @@ static int grow_pairs(sim *m, sim_pairs *p, size_t need, const char *what, pd_er
     size_t cap = pair_capacity(need);
     cl_int e = CL_SUCCESS;
     cl_context ctx = m->dev->ctx;
-    m->bytes += (double)(cap - p->cap) * (sizeof(cl_ulong) + 4 * m->rs);
+    m->bytes += (double)(cap - p->cap) * (sizeof(cl_ulong) + 7 * m->rs);
     if (p->keys) clReleaseMemObject(p->keys);
     if (p->spring) clReleaseMemObject(p->spring);
     if (p->kt) clReleaseMemObject(p->kt);
-    p->keys = p->spring = p->kt = NULL;
+    if (p->point) clReleaseMemObject(p->point);
+    p->keys = p->spring = p->kt = p->point = NULL;
     p->cap = 0;
     p->keys = clCreateBuffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_ulong) * cap, NULL, &e);
     if (e == CL_SUCCESS)
         p->spring = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * 3 * cap, NULL, &e);
     if (e == CL_SUCCESS) p->kt = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * cap, NULL, &e);
+    if (e == CL_SUCCESS)
+        p->point = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * 3 * cap, NULL, &e);
     if (e != CL_SUCCESS) return CL_FAIL(err, what, e);
     p->cap = cap;
     return PD_OK;
@@ -93,9 +96,9 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     if (rc != PD_OK) return rc;
     if (need > m->work_cap || !m->force) {
         size_t cap = pair_capacity(need);
-        cl_mem *b[] = {&m->force, &m->point, &m->info, &m->second_list};
-        size_t sz[] = {m->rs * 3, m->rs * 3, sizeof(float), sizeof(int)}; /* info: floats */
-        m->bytes += (double)(cap - m->work_cap) * (6 * m->rs + sizeof(float) + sizeof(int));
+        cl_mem *b[] = {&m->force, &m->info, &m->second_list};
+        size_t sz[] = {m->rs * 3, sizeof(float), sizeof(int)}; /* info: floats */
+        m->bytes += (double)(cap - m->work_cap) * (3 * m->rs + sizeof(float) + sizeof(int));
         m->work_cap = 0;
         for (size_t i = 0; i < sizeof b / sizeof b[0]; i++) {
             if (*b[i]) clReleaseMemObject(*b[i]);
@@ -182,11 +185,13 @@ static int keep_history(sim *m, pd_error *err)
     e |= ARG(k, 1, m->pairs.keys);
     e |= ARG(k, 2, m->pairs.spring);
     e |= ARG(k, 3, m->pairs.kt);
-    e |= ARG(k, 4, n);
-    e |= ARG(k, 5, m->carry_offset);
-    e |= ARG(k, 6, m->carry.keys);
-    e |= ARG(k, 7, m->carry.spring);
-    e |= ARG(k, 8, m->carry.kt);
+    e |= ARG(k, 4, m->pairs.point);
+    e |= ARG(k, 5, n);
+    e |= ARG(k, 6, m->carry_offset);
+    e |= ARG(k, 7, m->carry.keys);
+    e |= ARG(k, 8, m->carry.spring);
+    e |= ARG(k, 9, m->carry.kt);
+    e |= ARG(k, 10, m->carry.point);
     if (e != CL_SUCCESS) return arg_fail(err, "history_keep");
     if ((rc = cl_launch(dev, k, (size_t)n, "history_keep", err)) != PD_OK) return rc;
     return PD_OK;
@@ -335,6 +340,7 @@ static int contacts(sim *m, pd_error *err)
     e |= ARG(k, a++, m->carry_offset);
     e |= ARG(k, a++, m->carry.spring);
     e |= ARG(k, a++, m->carry.kt);
+    e |= ARG(k, a++, m->carry.point);
     cl_mem body[] = {
         m->x,     m->q,   m->v,    m->w,    m->size,   m->inv_m, m->shape, m->material,
         m->vert,  m->tri, m->voff, m->toff, m->vt_off, m->vt,    m->kind,  m->radius_ratio,
@@ -360,7 +366,7 @@ static int contacts(sim *m, pd_error *err)
     /* surfaces' gaps (cp_mesh_gap) certified up to the skin, a list's reach */
     e |= arg_real(m, k, a++, m->skin);
     e |= arg_real(m, k, a++, m->list_life);
-    cl_mem outs[] = {m->force, m->point, m->pairs.spring, m->pairs.kt, m->info};
+    cl_mem outs[] = {m->force, m->pairs.point, m->pairs.spring, m->pairs.kt, m->info};
     for (size_t i = 0; i < sizeof outs / sizeof outs[0]; i++)
         e |= ARG(k, a++, outs[i]);
     if (e != CL_SUCCESS) return arg_fail(err, "contact_forces");
@@ -409,7 +415,7 @@ static int gather(sim *m, pd_error *err)
     e |= ARG(k, a++, m->second_off);
     e |= ARG(k, a++, m->second_list);
     e |= ARG(k, a++, m->force);
-    e |= ARG(k, a++, m->point);
+    e |= ARG(k, a++, m->pairs.point);
     e |= ARG(k, a++, m->x);
     e |= ARG(k, a++, m->n);
     e |= ARG(k, a++, m->inv_m);

@@ -16,7 +16,8 @@
  * resting bed most candidates are such pairs, and their overlaps were half of the step.
  * A particle meets a wall's triangles found in the wall's BVH (wall_bvh.h, np_wall_local); a
  * wall-pair work-item's scratch begins with np_wall_ilen/_rlen(wall_cap) for them.
- * Per pair out: force on the second body (3), the contact point (3), the new
+ * Per pair out: force on the second body (3), the contact point (3; kept, as the spring, for the
+ * next step's overlap: contact_pair.h, OVL_ORIGIN), the new
  * tangential spring (3) and stiffness (1) (or certificate), and info (1 float in either
  * precision, for statistics): depth / smaller size when the bodies touch, -1 when they do not,
  * -2 when skipped as certified apart, -(3 + k) when apart but too close for a certificate, the
@@ -36,17 +37,18 @@ PD_FN pd_real pair_travel(__global const pd_real *travel, ch_key k, int nparticl
 __kernel void contact_forces(
     __global const ch_key *keys, int npairs, int fresh, __global const ch_key *carry_keys,
     __global const int *carry_offset, __global const pd_real *carry_spring,
-    __global const pd_real *carry_kt, __global const pd_real *x, __global const pd_real *q,
-    __global const pd_real *v, __global const pd_real *w, __global const pd_real *size,
-    __global const pd_real *inv_m, __global const int *shape, __global const int *material,
-    __global const pd_real *vert, __global const int *tri, __global const int *voff,
-    __global const int *toff, __global const int *vt_off, __global const int *vt,
-    __global const int *kind, __global const pd_real *radius_ratio, __global const pd_real *params,
-    int nmat, int nparticles, pd_real dt, __global const pd_real *wnode_box,
-    __global const int *wnode_kid, __global const int *wnode_off, __global const int *wtri_order,
-    int wall_cap, int nwall, __global int *status, __global int *iscr, __global pd_real *rscr,
-    int ilen, int rlen, int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap,
-    pd_real list_life, __global pd_real *force, __global pd_real *point, __global pd_real *spring,
+    __global const pd_real *carry_kt, __global const pd_real *carry_point,
+    __global const pd_real *x, __global const pd_real *q, __global const pd_real *v,
+    __global const pd_real *w, __global const pd_real *size, __global const pd_real *inv_m,
+    __global const int *shape, __global const int *material, __global const pd_real *vert,
+    __global const int *tri, __global const int *voff, __global const int *toff,
+    __global const int *vt_off, __global const int *vt, __global const int *kind,
+    __global const pd_real *radius_ratio, __global const pd_real *params, int nmat, int nparticles,
+    pd_real dt, __global const pd_real *wnode_box, __global const int *wnode_kid,
+    __global const int *wnode_off, __global const int *wtri_order, int wall_cap, int nwall,
+    __global int *status, __global int *iscr, __global pd_real *rscr, int ilen, int rlen,
+    int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap, pd_real list_life,
+    __global pd_real *force, __global pd_real *point, __global pd_real *spring,
     __global pd_real *kt, __global float *info)
 {
     int g = (int)get_global_id(0);
@@ -103,12 +105,14 @@ __kernel void contact_forces(
             int lo = carry_offset[ch_first(k)],
                 j = ch_find(carry_keys + lo, carry_offset[ch_first(k) + 1] - lo, k);
             j = j >= 0 ? lo + j : -1;
-            pd_v3 s0 = j >= 0 ? v3_load(carry_spring, j) : v3(0, 0, 0);
+            pd_v3 s0 = j >= 0 ? v3_load(carry_spring, j) : v3(0, 0, 0),
+                  p0 = j >= 0 ? v3_load(carry_point, j) : v3(0, 0, 0);
             pd_real kt0 = j >= 0 ? carry_kt[j] : PD_R(0);
-            cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, 1, &r);
-        } else {
-            cp_pair(&wd, k, v3_load(spring, c), pd_max(kt[c], PD_R(0)), is, rs, pts_cap, wait == 0,
-                    &r);
+            cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, 1, kt0 > PD_R(0), p0, &r);
+        } else { /* kt > 0: it touched in the last step, at point (as carried on a new list) */
+            pd_real kt0 = pd_max(kt[c], PD_R(0));
+            cp_pair(&wd, k, v3_load(spring, c), kt0, is, rs, pts_cap, wait == 0, kt0 > PD_R(0),
+                    v3_load(point, c), &r);
         }
         v3_store(force, c, r.force);
         v3_store(point, c, r.point);
@@ -139,9 +143,10 @@ __kernel void history_count(__global const int *offset, __global const pd_real *
 
 /* ... and copies them, in key order, to particle p's segment of the carried pairs. */
 __kernel void history_keep(__global const int *offset, __global const ch_key *keys,
-                           __global const pd_real *spring, __global const pd_real *kt, int n,
-                           __global const int *carry_offset, __global ch_key *carry_keys,
-                           __global pd_real *carry_spring, __global pd_real *carry_kt)
+                           __global const pd_real *spring, __global const pd_real *kt,
+                           __global const pd_real *point, int n, __global const int *carry_offset,
+                           __global ch_key *carry_keys, __global pd_real *carry_spring,
+                           __global pd_real *carry_kt, __global pd_real *carry_point)
 {
     int p = (int)get_global_id(0);
     if (p >= n) return;
@@ -151,6 +156,7 @@ __kernel void history_keep(__global const int *offset, __global const ch_key *ke
         carry_keys[j] = keys[c];
         v3_store(carry_spring, j, v3_load(spring, c));
         carry_kt[j] = kt[c];
+        v3_store(carry_point, j, v3_load(point, c));
         j++;
     }
 }

@@ -395,10 +395,13 @@ PD_FN void cp_none(cp_result *res)
  * Callers drop the pairs cp_apart rejects first (without their overlap, about half of a
  * polyhedral bed's candidates, and most of a reused list's).
  * in/rscr: the overlap scratch of this work-item (ovl_in's iscr, rscr, pts_cap). surfaces: the
- * surfaces' gap (cp_mesh_gap) may be searched for a separated pair (see CP_GAP_RETRY).
+ * surfaces' gap (cp_mesh_gap) may be searched for a separated pair (see CP_GAP_RETRY). last: the
+ * pair's contact point in the last step (world, m) when it touched then (has_last: kt0 > 0, on a
+ * reused list and a new one alike, so that reusing a list changes nothing), else unused.
  */
 PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, PD_GLOBAL int *iscr,
-                   PD_GLOBAL pd_real *rscr, int pts_cap, int surfaces, cp_result *res)
+                   PD_GLOBAL pd_real *rscr, int pts_cap, int surfaces, int has_last, pd_v3 last,
+                   cp_result *res)
 {
     int ia = (int)ch_first(key), ib = cp_body(wd, ch_second(key));
     np_body a, b;
@@ -445,6 +448,14 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         ovl_in in;
         pd_real ra[9];
         np_setup(&wd->sh, &a, &b, pr[CP_PLACES] != PD_R(0) ? OVL_PLACES : 0, &in, ra);
+        /* single precision: the cusps summed about last step's contact point are of the
+         * overlap's size, so its volume stands out of their rounding in one pass, where about
+         * a's centroid most touching pairs need a second (OVL_ORIGIN). Double precision has the
+         * room and keeps a's centroid, so its results do not depend on the last step. */
+        if (!PD_DOUBLE && has_last) {
+            in.flags |= OVL_ORIGIN;
+            in.org = np_to_body(&a, ra, last);
+        }
         if (wall_b) { /* the wall's triangles near a, from its BVH (thesis section 5.6) */
             int wi = ib - wd->nparticles;
             wb_tree t;

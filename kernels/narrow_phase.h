@@ -207,6 +207,14 @@ PD_FN pd_real np_hull_gap(const ovl_in *in, pd_real rad_a, pd_real rad_b, int it
     return best > PD_R(0) ? best : PD_R(0);
 }
 
+/* World point p in a's body frame (np_setup's A frame): R(q_a)^T (p - x_a), with ra = R(q_a). */
+PD_FN pd_v3 np_to_body(const np_body *a, const pd_real ra[9], pd_v3 p)
+{
+    pd_v3 d = v3_sub(p, a->x);
+    return v3(ra[0] * d.x + ra[3] * d.y + ra[6] * d.z, ra[1] * d.x + ra[4] * d.y + ra[7] * d.z,
+              ra[2] * d.x + ra[5] * d.y + ra[8] * d.z);
+}
+
 /* The overlap's centroid, normal and force point from a's body frame to world coordinates. */
 PD_FN void np_to_world(const np_body *a, const pd_real ra[9], ovl_out *o)
 {

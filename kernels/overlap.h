@@ -834,7 +834,8 @@ PD_FN void ovl_rescue(ovl_ctx *c, ovl_sums *sm)
                  r == x ? v3_scale(v3_add(v3_load(lo, x), v3_load(org, x)), PD_R(0.5))
                         : v3_load(org, r));
     }
-    c->node_org = 1; /* about the places' centres; the recording pass redoes the nodes' sums */
+    c->node_org = 1;  /* about the places' centres; the recording pass redoes the nodes' sums */
+    c->store_pts = 0; /* of the nodes stored already */
     ovl_sum(c, sm);
     c->node_org = 0;
     c->places = places;
@@ -1056,7 +1057,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         c->near_b[c->nb++] = u;
     }
 
-    c->origin = v3(0, 0, 0);
+    c->origin = (in->flags & OVL_ORIGIN) ? in->org : v3(0, 0, 0);
     ovl_sums sm;
     ovl_sum(c, &sm);
     /*
@@ -1068,7 +1069,8 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
      * sum is that small against its terms, the cusps are summed again about the centre of the
      * nodes' box, which holds the overlap (a polyhedron lies in its vertices' hull): each cusp
      * is then of the order of the overlap. In double precision this is below 2e-12 of the
-     * terms, and rare.
+     * terms, and rare. In single precision nearly every touching pair of a settled bed takes it
+     * (bench/RESULTS.md), unless the caller gives a better first origin (OVL_ORIGIN).
      */
     if (!(sm.vol > PD_R(1e4) * PD_EPS * sm.vol_abs) && c->npts > 0 && !c->pts_overflow) {
         pd_v3 lo = v3_load(c->pts, 0), hi = lo;

@@ -67,6 +67,15 @@
  * Double precision has 2^29 times the room and goes without.
  */
 #define OVL_RESCUE (OVL_PLACES_BUILD && !PD_DOUBLE)
+/*
+ * in->org (A's frame) lies near where the overlap is expected, e.g. the pair's contact point in
+ * the last step: the cusps are summed about it first instead of about A's centroid. Each cusp is a
+ * simplex from that origin to its node, so about a point inside the overlap they are of its size
+ * and the volume stands out of their rounding in one pass; about A's centroid a small overlap
+ * in single precision does not, and is summed again (ovl_compute). The result is the same in
+ * exact arithmetic.
+ */
+#define OVL_ORIGIN 16
 /* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals. */
 #define OVL_TRI_CACHE 18
 /* Reals in a kernel's result record (ovl_out_store; OVL_RESULT_LEN on the host). */
@@ -93,6 +102,7 @@ typedef struct ovl_in {
     PD_GLOBAL pd_real *rscr; /* ovl_rscratch_len reals */
     int pts_cap;             /* capacity for overlap nodes kept for the depth */
     wb_tree wall;            /* OVL_OPEN_B only: the whole wall, B's frame (B's size must be 1) */
+    pd_v3 org;               /* OVL_ORIGIN only: the first sum's origin, A's frame */
 } ovl_in;
 
 typedef struct ovl_out {

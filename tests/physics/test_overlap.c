@@ -10,6 +10,9 @@
 #include <stdint.h>
 #include <string.h>
 
+#define PD_DOUBLE 1
+#include "overlap_predicates.h" /* OVL_ORIGIN */
+#include "overlap_run.h"
 #include "polydem.h"
 #include "ref_overlap.h"
 #include "test.h"
@@ -636,6 +639,75 @@ TEST(corner_into_face_at_small_depths)
     pd_mesh_destroy(c);
 }
 
+/*
+ * OVL_ORIGIN (the engine sums a pair that touched in the last step about its contact point then):
+ * the cusps summed about another origin give the same overlap, within the rounding of the sums.
+ * Rocks overlapping by at least 1e-3 of their volume, against the plain sum in double precision:
+ * about the overlap's own centroid 1e-10, about a point 3.5 sizes away 1e-9 (cusps of up to
+ * 3.5^3 / 6 each and a hundred of them, 1e-16 each, against 1e-3); the centroid also checks the
+ * moment's shift back to A's frame. The cube's corner 1e-3 deep (the test above), against its
+ * exact tetrahedron, V = (sqrt(3)/2) h^3 with centroid (0.5 - h/4, 0, 0): about that centroid
+ * 1e-10 (the plain sum is 1.4e-9 off, its cusps being of the cube's size), about the far point
+ * 1e-4, the bound above which a sum is kept without summing again about the nodes (the
+ * centroid, a moment over V, to those times its lever arm: 4 from the far point). Single
+ * precision: 1e-3 for the rocks as above (about the far point the sum is redone about the nodes'
+ * centre), the corner to its tolerance in the test above.
+ */
+TEST(first_origin_leaves_the_overlap_unchanged)
+{
+    pd_mesh *rock = builtin("rock", 80), *cube = builtin("cube", 0);
+    double ang = acos(1 / sqrt(3.0)), sn = sin(ang / 2) / sqrt(2.0), h = 1e-3;
+    const double far[3] = {2, -2, 2};
+    int hits = 0;
+    for (int trial = 0; trial < 21; trial++) {
+        int corner = trial == 20;
+        pd_mesh *m = corner ? cube : rock;
+        pd_pose pb =
+            corner ? pose(0.5 + sqrt(3.0) / 2 - h, 0, 0, cos(ang / 2), 0, sn, -sn) : near_pose(0.8);
+        ovl_setup s;
+        pd_error err = {0};
+        if (ovl_setup_make(m, &ORIGIN, m, &pb, 0, &s, &err) != PD_OK) {
+            TEST_FAILF("setup: %s", err.msg);
+            break;
+        }
+        ovl_result d, o;
+        CHECK(ovl_run_f64(&s, &d) == PD_OK);
+        if (!d.hit || (!corner && d.volume < 1e-3)) {
+            ovl_setup_free(&s);
+            continue;
+        }
+        hits++;
+        if (corner) { /* the exact tetrahedron (depth and normal are exact already) */
+            d.volume = sqrt(3.0) / 2 * h * h * h;
+            d.centroid[0] = 0.5 - h / 4;
+            d.centroid[1] = d.centroid[2] = 0;
+        }
+        for (int k = 0; k < 4; k++) {
+            int single = k >= 2, at_far = k % 2;
+            s.flags = OVL_ORIGIN;
+            memcpy(s.org, at_far ? far : d.centroid, sizeof s.org);
+            CHECK((single ? ovl_run_f32(&s, &o) : ovl_run_f64(&s, &o)) == PD_OK);
+            double tol = single   ? (corner ? 3 * 8 * 1.1920929e-7 * 1.37 / h + 1e-4 : 1e-3)
+                         : at_far ? (corner ? 1e-4 : 1e-9)
+                                  : 1e-10;
+            CHECK(o.hit);
+            CHECK_REL(d.volume, o.volume, tol);
+            CHECK_VEC(d.normal[0], d.normal[1], d.normal[2], o.normal, single ? 1e-3 : tol);
+            if (!single) {
+                /* the centroid is the moment over V, and the moment's rounding grows with the
+                 * lever arm: relative to 4 (the far point's distance) or to the overlap's size */
+                double ct = tol * (at_far ? 4 : corner ? h : 1);
+                CHECK_VEC(d.centroid[0], d.centroid[1], d.centroid[2], o.centroid, ct);
+                CHECK_REL(d.depth, o.depth, tol);
+            }
+        }
+        ovl_setup_free(&s);
+    }
+    CHECK(hits > 5);
+    pd_mesh_destroy(rock);
+    pd_mesh_destroy(cube);
+}
+
 /* ---- separate places (thesis section 5.4, OVL_PLACES) -----------------------------------------
  */
 
@@ -815,6 +887,7 @@ int main(void)
     RUN(icosphere_overlap_converges_to_spherical_caps);
     RUN(single_precision_close_to_double);
     RUN(corner_into_face_at_small_depths);
+    RUN(first_origin_leaves_the_overlap_unchanged);
     RUN(separate_places_of_a_u_on_a_tilted_slab);
     RUN(places_agree_when_the_solids_swap);
     RUN(opencl_kernel_agrees_with_host);
