@@ -35,9 +35,8 @@ enum { SIM_INTEGRATE, SIM_BVH, SIM_TRAVERSE, SIM_CONTACTS, SIM_GATHER, SIM_NSTAG
 
 typedef struct sim_pairs {
     cl_mem keys, spring, kt;
-    cl_mem
-        point;  /* contact point (world) of the last step: the next overlap's origin (OVL_ORIGIN) */
-    size_t cap; /* capacity in pairs */
+    cl_mem point; /* last step's contact point (world): the next overlap's origin */
+    size_t cap;   /* capacity in pairs */
 } sim_pairs;
 
 typedef struct sim {
