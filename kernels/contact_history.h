@@ -1,7 +1,8 @@
 /*
  * contact_history.h - the per-pair state carried between steps (the tangential spring of thesis
- * eqs. 4.8-4.9) and the deterministic per-particle sum of contact forces, shared by OpenCL and
- * host C (see pd_real.h).
+ * eqs. 4.8-4.9, and the contact point, where single precision sums the next overlap: OVL_ORIGIN)
+ * and the deterministic per-particle sum of contact forces, shared by OpenCL and host C (see
+ * pd_real.h).
  *
  * A contact is named by a 64-bit key: first body in the high half, second in the low half, so the
  * contacts of one step sorted by key are grouped by first body. Walls are second bodies numbered
