@@ -108,10 +108,9 @@ __kernel void contact_forces(
             pd_v3 s0 = j >= 0 ? v3_load(carry_spring, j) : v3(0, 0, 0),
                   p0 = j >= 0 ? v3_load(carry_point, j) : v3(0, 0, 0);
             pd_real kt0 = j >= 0 ? carry_kt[j] : PD_R(0);
-            cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, 1, kt0 > PD_R(0), p0, &r);
+            cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, 1, p0, &r);
         } else { /* kt > 0: it touched in the last step, at point (as carried on a new list) */
-            pd_real kt0 = pd_max(kt[c], PD_R(0));
-            cp_pair(&wd, k, v3_load(spring, c), kt0, is, rs, pts_cap, wait == 0, kt0 > PD_R(0),
+            cp_pair(&wd, k, v3_load(spring, c), pd_max(kt[c], PD_R(0)), is, rs, pts_cap, wait == 0,
                     v3_load(point, c), &r);
         }
         v3_store(force, c, r.force);

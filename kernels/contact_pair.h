@@ -396,12 +396,11 @@ PD_FN void cp_none(cp_result *res)
  * polyhedral bed's candidates, and most of a reused list's).
  * in/rscr: the overlap scratch of this work-item (ovl_in's iscr, rscr, pts_cap). surfaces: the
  * surfaces' gap (cp_mesh_gap) may be searched for a separated pair (see CP_GAP_RETRY). last: the
- * pair's contact point in the last step (world, m) when it touched then (has_last: kt0 > 0, on a
- * reused list and a new one alike, so that reusing a list changes nothing), else unused.
+ * pair's contact point in the last step (world, m) when it touched then (kt0 > 0, on a reused
+ * list and a new one alike, so that reusing a list changes nothing), else unused.
  */
 PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, PD_GLOBAL int *iscr,
-                   PD_GLOBAL pd_real *rscr, int pts_cap, int surfaces, int has_last, pd_v3 last,
-                   cp_result *res)
+                   PD_GLOBAL pd_real *rscr, int pts_cap, int surfaces, pd_v3 last, cp_result *res)
 {
     int ia = (int)ch_first(key), ib = cp_body(wd, ch_second(key));
     np_body a, b;
@@ -452,7 +451,7 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
          * overlap's size, so its volume stands out of their rounding in one pass, where about
          * a's centroid most touching pairs need a second (OVL_ORIGIN). Double precision has the
          * room and keeps a's centroid, so its results do not depend on the last step. */
-        if (!PD_DOUBLE && has_last) {
+        if (!PD_DOUBLE && kt0 > PD_R(0)) {
             in.flags |= OVL_ORIGIN;
             in.org = np_to_body(&a, ra, last);
         }
