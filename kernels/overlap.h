@@ -274,8 +274,7 @@ PD_FN void ovl_tri_cached(ovl_tri *t, const ovl_ctx *c, PD_GLOBAL const pd_real 
 
 PD_FN int ovl_box_meets(const ovl_ctx *c, const ovl_tri *t)
 {
-    return !(t->hi.x < c->box_lo.x || t->lo.x > c->box_hi.x || t->hi.y < c->box_lo.y ||
-             t->lo.y > c->box_hi.y || t->hi.z < c->box_lo.z || t->lo.z > c->box_hi.z);
+    return ovl_boxes_meet(t->lo, t->hi, c->box_lo, c->box_hi);
 }
 
 /* Where canonical edge lo->hi crosses a plane, from its ends' signed distances: 0 at lo, 1 at hi.
@@ -345,12 +344,10 @@ PD_FN int ovl_lone_edge(int lone, int h)
     return h ? lone + 2 * (lone == 0) : lone - (lone != 0);
 }
 
-/* All cusps between A's triangle T and B's triangle U from edges of one crossing the other. */
+/* All cusps between A's triangle T and B's triangle U from edges of one crossing the other (the
+ * caller has checked that their boxes meet). */
 PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
 {
-    if (T->hi.x < U->lo.x || U->hi.x < T->lo.x || T->hi.y < U->lo.y || U->hi.y < T->lo.y ||
-        T->hi.z < U->lo.z || U->hi.z < T->lo.z)
-        return;
     pd_real qa[3], qb[3];
     int sa[3], sb[3];
     /* a triangle wholly on one side of the other's plane: no edge of either crosses the other */
@@ -461,15 +458,19 @@ PD_FN void ovl_pass(ovl_ctx *c)
         }
         /* B open (a wall's part): A is not filtered, so most of its triangles lie beside all
          * of B's near ones; between particles the box where the kept parts meet did that */
-        if (open_b && (T.hi.x < c->nblo.x || c->nbhi.x < T.lo.x || T.hi.y < c->nblo.y ||
-                       c->nbhi.y < T.lo.y || T.hi.z < c->nblo.z || c->nbhi.z < T.lo.z))
-            continue;
+        if (open_b && !ovl_boxes_meet(T.lo, T.hi, c->nblo, c->nbhi)) continue;
+        /* Boxes first, from the cache: most pairs end there. Whether two boxes meet is
+         * unpredictable, so the ones that do are listed without a branch (a branch per box
+         * was the most mispredicted in a 1280-triangle icosphere pair), then paired in order. */
+        int nh = 0;
         for (int l = 0; l < c->nb; l++) {
             PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
-            /* box first, from the cache: most pairs end here */
-            if (T.hi.x < uc[3] || uc[6] < T.lo.x || T.hi.y < uc[4] || uc[7] < T.lo.y ||
-                T.hi.z < uc[5] || uc[8] < T.lo.z)
-                continue;
+            c->hits[nh] = l;
+            nh += ovl_boxes_meet(T.lo, T.hi, v3_load(uc, 1), v3_load(uc, 2));
+        }
+        for (int h = 0; h < nh; h++) {
+            int l = c->hits[h];
+            PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
             int u = c->near_b[l];
             ovl_tri U;
             U.id[0] = tb[3 * u];
@@ -854,6 +855,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->near_b = c->near_a + in->nta;
     c->st_a = c->near_b + in->ntb;
     c->st_b = c->st_a + in->nva;
+    c->hits = c->st_b + in->nvb;
     c->proj_a = in->rscr;
     c->proj_b = in->rscr + in->nva;
     c->vat = c->proj_b + in->nvb;
@@ -885,22 +887,30 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     pd_real trd = in->tr[0] * d.x + in->tr[1] * d.y + in->tr[2] * d.z;
 
     /* eq. 5.4: extents; eq. 5.5: keep the triangles reaching into the other's half-plane */
-    c->e1 = -PD_REAL_MAX;
-    c->e2 = PD_REAL_MAX;
-    pd_real scale = PD_R(0);
+    /* The two loops over every vertex are the part of a pair's cost that grows with the meshes
+     * whatever the overlap: locals, not c's fields (which the stores might alias), and max
+     * instructions rather than branches keep them to a few instructions a vertex. */
+    pd_real e1 = -PD_REAL_MAX, e2 = PD_REAL_MAX, scale = PD_R(0);
     pd_v3 da = v3_scale(d, in->sa);
-    for (int i = 0; i < in->nva; i++) {
-        c->proj_a[i] = v3_dot(v3_load(in->va, i), da); /* = (sa v) . d, for the padded filter */
-        if (c->proj_a[i] > c->e1) c->e1 = c->proj_a[i];
-        if (PD_FABS(c->proj_a[i]) > scale) scale = PD_FABS(c->proj_a[i]);
-        c->st_a[i] = 0;
+    {
+        PD_GLOBAL const pd_real *va = in->va, *vb = in->vb;
+        PD_GLOBAL pd_real *pa = c->proj_a, *pb = c->proj_b;
+        int nva = in->nva, nvb = in->nvb;
+        for (int i = 0; i < nva; i++) {
+            pd_real p = v3_dot(v3_load(va, i), da); /* = (sa v) . d, for the padded filter */
+            pa[i] = p;
+            e1 = pd_max(e1, p);
+            scale = pd_max(scale, PD_FABS(p));
+        }
+        for (int j = 0; j < nvb; j++) {
+            pd_real p = v3_dot(v3_load(vb, j), db) + trd;
+            pb[j] = p;
+            e2 = pd_min(e2, p);
+            scale = pd_max(scale, PD_FABS(p));
+        }
     }
-    for (int j = 0; j < in->nvb; j++) {
-        c->proj_b[j] = v3_dot(v3_load(in->vb, j), db) + trd;
-        if (c->proj_b[j] < c->e2) c->e2 = c->proj_b[j];
-        if (PD_FABS(c->proj_b[j]) > scale) scale = PD_FABS(c->proj_b[j]);
-        c->st_b[j] = 0;
-    }
+    c->e1 = e1;
+    c->e2 = e2;
     /* The half-planes are widened by the resolution: B's projections are computed in B's frame,
      * and a contact that touches to within rounding must reach the symbolic tests. */
     pd_real pad = OVL_SNAP * scale;
@@ -963,6 +973,13 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         ovl_miss(o, c);
         return;
     }
+    /* vertex states: only the kept triangles' corners are ever looked at */
+    for (int k = 0; k < c->ka; k++)
+        for (int q = 0; q < 3; q++)
+            c->st_a[in->ta[3 * c->kept_a[k] + q]] = 0;
+    for (int l = 0; l < c->kb; l++)
+        for (int q = 0; q < 3; q++)
+            c->st_b[in->tb[3 * c->kept_b[l] + q]] = 0;
     pd_v3 alo = v3(PD_REAL_MAX, PD_REAL_MAX, PD_REAL_MAX), ahi = v3_scale(alo, PD_R(-1));
     pd_v3 blo = alo, bhi = ahi;
     for (int k = 0; k < c->ka; k++) {

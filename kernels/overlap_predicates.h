@@ -129,7 +129,7 @@ typedef struct ovl_out {
 
 PD_FN int ovl_iscratch_len(int nta, int ntb, int nva, int nvb)
 {
-    return 2 * (nta + ntb) + nva + nvb;
+    return 2 * (nta + ntb) + nva + nvb + ntb;
 }
 PD_FN int ovl_rscratch_len(int nva, int nvb, int ntb, int pts_cap)
 {
@@ -171,6 +171,7 @@ typedef struct ovl_ctx {
     int ka, kb; /* triangles kept by the half-plane filter: the ray casts' candidates */
     int na, nb; /* of those, the ones meeting the box where A n B can lie: the pair loop's */
     PD_GLOBAL int *kept_a, *kept_b, *near_a, *near_b, *st_a, *st_b;
+    PD_GLOBAL int *hits; /* ovl_pass: the near triangles of B whose boxes meet the current T's */
     pd_v3 box_lo, box_hi;     /* box of A's kept part n box of B's kept part, padded */
     pd_v3 alo, ahi, blo, bhi; /* boxes of A's and B's kept parts, padded */
     pd_v3 nblo, nbhi;         /* box of B's near triangles (the pair loop's), padded */
@@ -318,12 +319,31 @@ PD_FN void ovl_ray_box(pd_v3 p, pd_v3 r, pd_v3 lo, pd_v3 hi, pd_real pad, pd_v3 
     *rhi = v3(pd_max(p.x, q.x) + pad, pd_max(p.y, q.y) + pad, pd_max(p.z, q.z) + pad);
 }
 
+/*
+ * Whether boxes [alo, ahi] and [blo, bhi] meet: on each axis the larger low end lies at or below
+ * the smaller high end. Written as max / min arithmetic with a single comparison, where the
+ * obvious form (six comparisons joined by ||) compiles to up to six branches: whether a box test
+ * passes is unpredictable, and on a 1280-triangle icosphere pair those branches were half of
+ * the mispredicted ones (callgrind --branch-sim; bench/RESULTS.md). For boxes with lo <= hi the
+ * answer is the comparisons' own: a difference is 0 only when its terms are equal (where a
+ * device flushes subnormals, a gap below 1e-38 reads as touching, which only costs a test).
+ */
+PD_FN int ovl_boxes_meet(pd_v3 alo, pd_v3 ahi, pd_v3 blo, pd_v3 bhi)
+{
+    pd_real gx = pd_max(alo.x, blo.x) - pd_min(ahi.x, bhi.x);
+    pd_real gy = pd_max(alo.y, blo.y) - pd_min(ahi.y, bhi.y);
+    pd_real gz = pd_max(alo.z, blo.z) - pd_min(ahi.z, bhi.z);
+    return pd_max(pd_max(gx, gy), gz) <= PD_R(0);
+}
+
 /* Whether triangle (u0, u1, u2) can meet the box [lo, hi]. */
 PD_FN int ovl_tri_meets(pd_v3 u0, pd_v3 u1, pd_v3 u2, pd_v3 lo, pd_v3 hi)
 {
-    return !(pd_max(pd_max(u0.x, u1.x), u2.x) < lo.x || pd_min(pd_min(u0.x, u1.x), u2.x) > hi.x ||
-             pd_max(pd_max(u0.y, u1.y), u2.y) < lo.y || pd_min(pd_min(u0.y, u1.y), u2.y) > hi.y ||
-             pd_max(pd_max(u0.z, u1.z), u2.z) < lo.z || pd_min(pd_min(u0.z, u1.z), u2.z) > hi.z);
+    pd_v3 tlo = v3(pd_min(pd_min(u0.x, u1.x), u2.x), pd_min(pd_min(u0.y, u1.y), u2.y),
+                   pd_min(pd_min(u0.z, u1.z), u2.z));
+    pd_v3 thi = v3(pd_max(pd_max(u0.x, u1.x), u2.x), pd_max(pd_max(u0.y, u1.y), u2.y),
+                   pd_max(pd_max(u0.z, u1.z), u2.z));
+    return ovl_boxes_meet(tlo, thi, lo, hi);
 }
 
 PD_FN int ovl_in_box(const ovl_ctx *c, pd_v3 p)
