@@ -171,8 +171,8 @@ typedef struct ovl_ctx {
     int ka, kb; /* triangles kept by the half-plane filter: the ray casts' candidates */
     int na, nb; /* of those, the ones meeting the box where A n B can lie: the pair loop's */
     PD_GLOBAL int *kept_a, *kept_b, *near_a, *near_b, *st_a, *st_b;
-    PD_GLOBAL int *hits; /* ovl_pass: the near triangles of B whose boxes meet the current T's */
-    pd_v3 box_lo, box_hi;     /* box of A's kept part n box of B's kept part, padded */
+    PD_GLOBAL int *hits;  /* ovl_pass: the near triangles of B whose boxes meet the current T's */
+    pd_v3 box_lo, box_hi; /* box of A's kept part n box of B's kept part, padded */
     pd_v3 alo, ahi, blo, bhi; /* boxes of A's and B's kept parts, padded */
     pd_v3 nblo, nbhi;         /* box of B's near triangles (the pair loop's), padded */
     int origin_in_b;          /* OVL_OPEN_B: A's centroid inside the wall; -1 not yet known */
