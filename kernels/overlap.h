@@ -432,10 +432,10 @@ PD_FN void ovl_pass(ovl_ctx *c)
     c->inode = 0;
     c->rec = c->places && !c->flip && !c->depth_mode;
     c->cur_node = -1;
-    /* only the kept triangles' corners are ever tested */
+    /* only the kept triangles' corners are ever tested (A's have no READY bit to keep) */
     for (int k = 0; k < c->ka; k++)
         for (int q = 0; q < 3; q++)
-            c->st_a[ta[3 * c->kept_a[k] + q]] &= OVL_V_READY;
+            c->st_a[ta[3 * c->kept_a[k] + q]] = 0;
     for (int l = 0; l < c->kb; l++)
         for (int q = 0; q < 3; q++)
             c->st_b[tb[3 * c->kept_b[l] + q]] &= OVL_V_READY;
@@ -973,10 +973,8 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         ovl_miss(o, c);
         return;
     }
-    /* vertex states: only the kept triangles' corners are ever looked at */
-    for (int k = 0; k < c->ka; k++)
-        for (int q = 0; q < 3; q++)
-            c->st_a[in->ta[3 * c->kept_a[k] + q]] = 0;
+    /* B's vertex states, before the transforms mark theirs READY: only the kept triangles'
+     * corners are ever looked at (A's are cleared by each pass) */
     for (int l = 0; l < c->kb; l++)
         for (int q = 0; q < 3; q++)
             c->st_b[in->tb[3 * c->kept_b[l] + q]] = 0;
