@@ -311,7 +311,7 @@ int main(int argc, char **argv)
     int pc = ovl_pts_cap(mt, mt);
     int *iscr = malloc(sizeof(int) * (ovl_iscratch_len(mt, mt, mv, mv) + ovl_places_ilen(pc)));
     double *rscr =
-        malloc(sizeof(double) * (ovl_rscratch_len(mv, mv, mt, pc) + ovl_places_rlen(pc)));
+        malloc(sizeof(double) * (ovl_rscratch_len(mt, mt, mv, mv, pc) + ovl_places_rlen(pc)));
     ovl_in *in = calloc((size_t)np, sizeof *in);
     ovl_out *out = calloc((size_t)np, sizeof *out), *pl = calloc((size_t)np, sizeof *pl);
     double *rho = malloc(sizeof(double) * np), *rho_eff = malloc(sizeof(double) * np),

@@ -107,7 +107,8 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
     ovl_setup *s0 = &cf->s[0];
     int cap = ovl_pts_cap(s0->nta, s0->ntb);
     int *iscr = malloc(sizeof(int) * ovl_iscratch_len(s0->nta, s0->ntb, s0->nva, s0->nvb));
-    double *rscr = malloc(sizeof(double) * ovl_rscratch_len(s0->nva, s0->nvb, s0->ntb, cap));
+    double *rscr =
+        malloc(sizeof(double) * ovl_rscratch_len(s0->nta, s0->ntb, s0->nva, s0->nvb, cap));
     ovl_in in[NCONF];
     for (int i = 0; i < n; i++) {
         ovl_in_from_setup(&in[i], &cf->s[i], cf->s[i].va, cf->s[i].vb, flags, iscr, rscr, cap);

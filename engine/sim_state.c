@@ -355,10 +355,10 @@ static int upload_shapes(sim *m, pd_error *err)
     int cap = m->wall_cap, cap_v = 3 * cap;
     m->pts_cap = ovl_pts_cap(max_ta, max_tb > cap ? max_tb : cap);
     m->ilen = ovl_iscratch_len(max_ta, max_tb, max_va, max_vb);
-    m->rlen = ovl_rscratch_len(max_va, max_vb, max_tb, m->pts_cap);
+    m->rlen = ovl_rscratch_len(max_ta, max_tb, max_va, max_vb, m->pts_cap);
     if (cap > 0) {
         int il = np_wall_ilen(cap) + ovl_iscratch_len(max_ta, cap, max_va, cap_v);
-        int rl = np_wall_rlen(cap) + ovl_rscratch_len(max_va, cap_v, cap, m->pts_cap);
+        int rl = np_wall_rlen(cap) + ovl_rscratch_len(max_ta, cap, max_va, cap_v, m->pts_cap);
         m->ilen = il > m->ilen ? il : m->ilen;
         m->rlen = rl > m->rlen ? rl : m->rlen;
     }

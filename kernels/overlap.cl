@@ -41,7 +41,7 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
     wb_tree_none(&in.wall);
     in.iscr = iscr +
               (size_t)g * (size_t)(ovl_iscratch_len(nta, ntb, nva, nvb) + ovl_places_ilen(pts_cap));
-    in.rscr = rscr + (size_t)g * (size_t)(ovl_rscratch_len(nva, nvb, ntb, pts_cap) +
+    in.rscr = rscr + (size_t)g * (size_t)(ovl_rscratch_len(nta, ntb, nva, nvb, pts_cap) +
                                           ovl_places_rlen(pts_cap));
     in.pts_cap = pts_cap;
     ovl_out o;

@@ -463,10 +463,28 @@ PD_FN void ovl_pass(ovl_ctx *c)
          * unpredictable, so the ones that do are listed without a branch (a branch per box
          * was the most mispredicted in a 1280-triangle icosphere pair), then paired in order. */
         int nh = 0;
-        for (int l = 0; l < c->nb; l++) {
-            PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
-            c->hits[nh] = l;
-            nh += ovl_boxes_meet(T.lo, T.hi, v3_load(uc, 1), v3_load(uc, 2));
+        if (c->sweep) {
+            /* the boxes whose low ends on the sweep's axis lie from T's low end less the widest
+             * box (and a resolution for the rounding of the width) to T's high end: every box
+             * that can meet T's, then tested as below and put back in near_b's order, the order
+             * the cusps are summed in */
+            int a = c->sweep_axis;
+            pd_real tlo = a == 0 ? T.lo.x : a == 1 ? T.lo.y : T.lo.z;
+            pd_real thi = a == 0 ? T.hi.x : a == 1 ? T.hi.y : T.hi.z;
+            int k = ovl_first_key(c->sweep_key, c->nb, tlo - c->sweep_width - c->pad);
+            for (; k < c->nb && c->sweep_key[k] <= thi; k++) {
+                int l = c->sweep_ord[k];
+                PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
+                c->hits[nh] = l;
+                nh += ovl_boxes_meet(T.lo, T.hi, v3_load(uc, 1), v3_load(uc, 2));
+            }
+            ovl_sort(c->hits, nh);
+        } else {
+            for (int l = 0; l < c->nb; l++) {
+                PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
+                c->hits[nh] = l;
+                nh += ovl_boxes_meet(T.lo, T.hi, v3_load(uc, 1), v3_load(uc, 2));
+            }
         }
         for (int h = 0; h < nh; h++) {
             int l = c->hits[h];
@@ -496,22 +514,6 @@ PD_FN void ovl_pass(ovl_ctx *c)
             if (OVL_PLACES_BUILD && c->rec) ovl_cusps_of(c, c->st_b[id[q]] / OVL_V_NODE - 1);
             ovl_cusp(c, U.p[q], U.e[q], U.m[q], U.nu, 1);
             ovl_cusp(c, U.p[q], v3_scale(U.e[qp], PD_R(-1)), U.m[qp], U.nu, 1);
-        }
-    }
-}
-
-/*
- * Sorts an index list ascending in place: insertion sort for the short, nearly sorted lists of a
- * DEM contact, Shell sort beyond (no recursion, no extra memory).
- */
-PD_FN void ovl_sort(PD_GLOBAL int *a, int n)
-{
-    for (int gap = n > 64 ? n / 2 : 1; gap > 0; gap = gap == 2 ? 1 : gap * 5 / 11) {
-        for (int i = gap; i < n; i++) {
-            int x = a[i], j = i;
-            for (; j >= gap && a[j - gap] > x; j -= gap)
-                a[j] = a[j - gap];
-            a[j] = x;
         }
     }
 }
@@ -856,12 +858,23 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->st_a = c->near_b + in->ntb;
     c->st_b = c->st_a + in->nva;
     c->hits = c->st_b + in->nvb;
+    c->strip_a.ord = c->hits + in->ntb;
+    c->strip_b.ord = c->strip_a.ord + in->nta;
+    c->sweep_ord = c->strip_b.ord + in->ntb;
+    c->strip_a.built = c->strip_b.built = 0; /* built by the first cast that needs one */
+    c->strip_a.eu = c->strip_b.eu = v3(0, 0, 0);
+    c->strip_a.width = c->strip_b.width = PD_R(0);
     c->proj_a = in->rscr;
     c->proj_b = in->rscr + in->nva;
     c->vat = c->proj_b + in->nvb;
     c->vbt = c->vat + 3 * in->nva;
     c->pts = c->vbt + 3 * in->nvb;
     c->ucache = c->pts + 3 * in->pts_cap;
+    c->strip_a.key = c->ucache + OVL_TRI_CACHE * in->ntb;
+    c->strip_b.key = c->strip_a.key + in->nta;
+    c->sweep_key = c->strip_b.key + in->ntb;
+    c->sweep = c->sweep_axis = 0;
+    c->sweep_width = PD_R(0);
     c->npts = c->pts_overflow = 0;
     c->store_pts = 1;
     /* OVL_PLACES: its scratch follows the usual */
@@ -869,7 +882,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->rec = c->inode = c->joined = c->node_org = 0;
     c->cur_node = -1;
     c->nd_i = in->iscr + ovl_iscratch_len(in->nta, in->ntb, in->nva, in->nvb);
-    c->nd_r = in->rscr + ovl_rscratch_len(in->nva, in->nvb, in->ntb, in->pts_cap);
+    c->nd_r = in->rscr + ovl_rscratch_len(in->nta, in->ntb, in->nva, in->nvb, in->pts_cap);
     c->flip = c->degenerate = c->depth_mode = 0;
     c->pad = c->tol2 = c->tol3 = PD_R(0);
     c->ka = c->kb = c->na = c->nb = 0;
@@ -1070,6 +1083,22 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         for (int q = 0; q < 6; q++)
             v3_store(uc, q, v[q]);
         c->near_b[c->nb++] = u;
+    }
+    if (c->filter && c->nb >= OVL_STRIP_MIN) {
+        /* the pair loop's sweep (ovl_ctx): the axis d is least aligned with, across the contact */
+        pd_v3 ad = v3(PD_FABS(d.x), PD_FABS(d.y), PD_FABS(d.z));
+        int a = ad.x <= ad.y && ad.x <= ad.z ? 0 : ad.y <= ad.z ? 1 : 2;
+        pd_real width = PD_R(0);
+        for (int l = 0; l < c->nb; l++) {
+            PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
+            c->sweep_key[l] = uc[3 + a];
+            c->sweep_ord[l] = l;
+            width = pd_max(width, uc[6 + a] - uc[3 + a]);
+        }
+        ovl_sort_keyed(c->sweep_key, c->sweep_ord, c->nb);
+        c->sweep = 1;
+        c->sweep_axis = a;
+        c->sweep_width = width;
     }
 
     c->origin = (in->flags & OVL_ORIGIN) ? in->org : v3(0, 0, 0);

@@ -129,11 +129,11 @@ typedef struct ovl_out {
 
 PD_FN int ovl_iscratch_len(int nta, int ntb, int nva, int nvb)
 {
-    return 2 * (nta + ntb) + nva + nvb + ntb;
+    return 3 * (nta + ntb) + nva + nvb + 2 * ntb;
 }
-PD_FN int ovl_rscratch_len(int nva, int nvb, int ntb, int pts_cap)
+PD_FN int ovl_rscratch_len(int nta, int ntb, int nva, int nvb, int pts_cap)
 {
-    return nva + nvb + 3 * nva + 3 * nvb + 3 * pts_cap + OVL_TRI_CACHE * ntb;
+    return nva + nvb + 3 * nva + 3 * nvb + 3 * pts_cap + OVL_TRI_CACHE * ntb + nta + 2 * ntb;
 }
 /* The per-node arrays of OVL_PLACES (ovl_ctx, ovl_ndi, ovl_ndr): ints and reals. */
 enum { OVL_ND_KEY, OVL_ND_END, OVL_ND_FL, OVL_ND_PAR, OVL_ND_ORD, OVL_ND_INTS };
@@ -163,6 +163,24 @@ PD_FN int ovl_places_rlen(int pts_cap)
 #define OVL_V_INSIDE 4 /* inside the other polyhedron */
 #define OVL_V_NODE 8   /* bits from here: 1 + the index of the vertex's node in this pass */
 
+/*
+ * One solid's kept triangles in order along eu, a direction across d, for the ray casts: every ray
+ * of ovl_ray_parity runs along +-d, so only the triangles whose extent along eu holds the ray's
+ * can be crossed, a strip of about the square root of them on a curved contact. The other tests
+ * of a cast being O(kept triangles) each, a contact of many triangles was dominated by them (a
+ * 5120-triangle rock pair at 1 % depth spent 63 % of its time there, bench/RESULTS.md). Built
+ * on the solid's first cast of an overlap, when it has OVL_STRIP_MIN kept triangles or more;
+ * below that, a cast tests every kept triangle (sorting would cost more than it saves).
+ */
+#define OVL_STRIP_MIN 64
+typedef struct ovl_strip {
+    PD_GLOBAL int *ord;     /* the kept triangles, by key */
+    PD_GLOBAL pd_real *key; /* each one's lowest corner along eu */
+    pd_real width;          /* the widest one's extent along eu */
+    pd_v3 eu;
+    int built;
+} ovl_strip;
+
 typedef struct ovl_ctx {
     const ovl_in *in;
     pd_v3 d; /* filter direction, eq. 5.3 */
@@ -177,6 +195,17 @@ typedef struct ovl_ctx {
     pd_v3 nblo, nbhi;         /* box of B's near triangles (the pair loop's), padded */
     int origin_in_b;          /* OVL_OPEN_B: A's centroid inside the wall; -1 not yet known */
     PD_GLOBAL pd_real *proj_a, *proj_b, *vat, *vbt, *pts, *ucache;
+    ovl_strip strip_a, strip_b; /* for casts from B's vertices through A, and from A's through B */
+    /*
+     * The pair loop's sweep, when B has OVL_STRIP_MIN near triangles or more: their boxes in
+     * order of their low ends on the axis d is least aligned with (sweep_ord: positions in
+     * near_b; sweep_key: the low ends; sweep_width: the widest box on that axis), so that each
+     * triangle of A looks only at the boxes that can meet its own on that axis instead of at all.
+     */
+    int sweep, sweep_axis;
+    pd_real sweep_width;
+    PD_GLOBAL int *sweep_ord;
+    PD_GLOBAL pd_real *sweep_key;
     int npts, pts_overflow, store_pts;
     /*
      * OVL_PLACES. Every node gets an index in the order a pass emits them (inode counts; a pass
@@ -405,14 +434,98 @@ PD_FN int ovl_ray_crosses(ovl_ctx *c, pd_v3 p, pd_v3 r, pd_real sp, const pd_v3 
  * sp eps w: sp = -1 for A's points tested against B, +1 for B's against A; sp fixes every
  * tie-break below as in ovl_side_a/_b.
  */
+/*
+ * Sorts an index list ascending in place: insertion sort for the short, nearly sorted lists of a
+ * DEM contact, Shell sort beyond (no recursion, no extra memory).
+ */
+PD_FN void ovl_sort(PD_GLOBAL int *a, int n)
+{
+    for (int gap = n > 64 ? n / 2 : 1; gap > 0; gap = gap == 2 ? 1 : gap * 5 / 11) {
+        for (int i = gap; i < n; i++) {
+            int x = a[i], j = i;
+            for (; j >= gap && a[j - gap] > x; j -= gap)
+                a[j] = a[j - gap];
+            a[j] = x;
+        }
+    }
+}
+
+/* Sorts key[0..n) ascending, carrying ord along (Shell sort: no recursion, no extra memory). */
+PD_FN void ovl_sort_keyed(PD_GLOBAL pd_real *key, PD_GLOBAL int *ord, int n)
+{
+    for (int gap = n / 2; gap > 0; gap = gap == 2 ? 1 : gap * 5 / 11) {
+        for (int i = gap; i < n; i++) {
+            pd_real x = key[i];
+            int t = ord[i], j = i;
+            for (; j >= gap && key[j - gap] > x; j -= gap) {
+                key[j] = key[j - gap];
+                ord[j] = ord[j - gap];
+            }
+            key[j] = x;
+            ord[j] = t;
+        }
+    }
+}
+
+/* The first of the ascending key[0..n) that is >= x (n when none is). */
+PD_FN int ovl_first_key(PD_GLOBAL const pd_real *key, int n, pd_real x)
+{
+    int a = 0, b = n;
+    while (a < b) {
+        int mid = (a + b) / 2;
+        if (key[mid] < x)
+            a = mid + 1;
+        else
+            b = mid;
+    }
+    return a;
+}
+
+PD_FN void ovl_strip_build(const ovl_ctx *c, ovl_strip *s, PD_GLOBAL const int *tri,
+                           PD_GLOBAL const int *kept, int nk, PD_GLOBAL const pd_real *vx)
+{
+    /* eu: d crossed with the axis it is least aligned with */
+    pd_v3 d = c->d, ad = v3(PD_FABS(d.x), PD_FABS(d.y), PD_FABS(d.z));
+    pd_v3 ax = ad.x <= ad.y && ad.x <= ad.z ? v3(1, 0, 0)
+               : ad.y <= ad.z               ? v3(0, 1, 0)
+                                            : v3(0, 0, 1);
+    s->eu = v3_unit(v3_cross(d, ax));
+    pd_real width = PD_R(0);
+    for (int k = 0; k < nk; k++) {
+        int t = kept[k];
+        pd_real u0 = v3_dot(v3_load(vx, tri[3 * t]), s->eu);
+        pd_real u1 = v3_dot(v3_load(vx, tri[3 * t + 1]), s->eu);
+        pd_real u2 = v3_dot(v3_load(vx, tri[3 * t + 2]), s->eu);
+        pd_real lo = pd_min(pd_min(u0, u1), u2);
+        width = pd_max(width, pd_max(pd_max(u0, u1), u2) - lo);
+        s->key[k] = lo;
+        s->ord[k] = t;
+    }
+    s->width = width;
+    ovl_sort_keyed(s->key, s->ord, nk); /* kept lists come in index order, unrelated to eu */
+    s->built = 1;
+}
+
 PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, PD_GLOBAL const int *tri, PD_GLOBAL const int *kept,
-                         int nk, PD_GLOBAL const pd_real *vx, pd_real sp, pd_v3 lo, pd_v3 hi)
+                         int nk, PD_GLOBAL const pd_real *vx, pd_real sp, pd_v3 lo, pd_v3 hi,
+                         ovl_strip *s)
 {
     pd_v3 r = v3_scale(c->d, sp);
     pd_v3 rlo, rhi;
     ovl_ray_box(p, r, lo, hi, c->pad, &rlo, &rhi);
-    int odd = 0;
-    for (int k = 0; k < nk; k++) {
+    int odd = 0, k0 = 0, k1 = nk;
+    if (c->filter && nk >= OVL_STRIP_MIN) {
+        if (!s->built) ovl_strip_build(c, s, tri, kept, nk, vx);
+        /* the triangles whose extent along eu, widened by 4 resolutions (as the boxes are by
+         * one; the coordinates along eu carry a few ulps of L), holds the ray's: keys from
+         * u - width - m to u + m */
+        pd_real u = v3_dot(p, s->eu), m = PD_R(4) * c->pad;
+        k0 = ovl_first_key(s->key, nk, u - s->width - m);
+        for (k1 = k0; k1 < nk && s->key[k1] <= u + m; k1++)
+            ;
+        kept = s->ord;
+    }
+    for (int k = k0; k < k1; k++) {
         int t = kept[k];
         int id[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
         pd_v3 v[3] = {v3_load(vx, id[0]), v3_load(vx, id[1]), v3_load(vx, id[2])};
@@ -531,7 +644,8 @@ PD_FN int ovl_inside_b(ovl_ctx *c, int i)
     if (c->in->flags & OVL_OPEN_B) return ovl_open_inside_b(c, p);
     if (c->filter && c->proj_a[i] < c->e2) return 0; /* below B's half-plane: outside */
     if (c->filter && !ovl_in_box(c, p)) return 0;    /* outside the box where A n B lies */
-    return ovl_ray_parity(c, p, c->in->tb, c->kept_b, c->kb, c->vbt, PD_R(-1), c->blo, c->bhi);
+    return ovl_ray_parity(c, p, c->in->tb, c->kept_b, c->kb, c->vbt, PD_R(-1), c->blo, c->bhi,
+                          &c->strip_b);
 }
 
 /* Point-in-A test for B's vertex j. */
@@ -540,7 +654,8 @@ PD_FN int ovl_inside_a(ovl_ctx *c, int j)
     pd_v3 u = ovl_vb(c, j);
     if (c->filter && c->proj_b[j] > c->e1) return 0; /* above A's half-plane: outside */
     if (c->filter && !ovl_in_box(c, u)) return 0;
-    return ovl_ray_parity(c, u, c->in->ta, c->kept_a, c->ka, c->vat, PD_R(1), c->alo, c->ahi);
+    return ovl_ray_parity(c, u, c->in->ta, c->kept_a, c->ka, c->vat, PD_R(1), c->alo, c->ahi,
+                          &c->strip_a);
 }
 
 #endif /* PD_OVERLAP_PREDICATES_H */

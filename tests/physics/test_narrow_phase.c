@@ -103,7 +103,8 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
         b[i].shape = i % NSHAPE;
     }
     int ilen = ovl_iscratch_len(toff[NSHAPE], toff[NSHAPE], voff[NSHAPE], voff[NSHAPE]);
-    int cap = 1024, rlen = ovl_rscratch_len(voff[NSHAPE], voff[NSHAPE], toff[NSHAPE], cap);
+    int cap = 1024,
+        rlen = ovl_rscratch_len(toff[NSHAPE], toff[NSHAPE], voff[NSHAPE], voff[NSHAPE], cap);
     int *iscr = malloc(sizeof(int) * ilen);
     double *rscr = malloc(sizeof(double) * rlen);
     int hits = 0, checked = 0, npairs = 0;
@@ -261,7 +262,7 @@ TEST(separation_gaps_are_lower_bounds)
     if (shapes_build(&set)) return;
     int cap = 1024, nt = set.toff[NSHAPE], nv = set.voff[NSHAPE];
     int *iscr = malloc(sizeof(int) * ovl_iscratch_len(nt, nt, nv, nv));
-    double *rscr = malloc(sizeof(double) * ovl_rscratch_len(nv, nv, nt, cap));
+    double *rscr = malloc(sizeof(double) * ovl_rscratch_len(nt, nt, nv, nv, cap));
     int misses = 0, hull = 0, mesh_only = 0, moved = 0;
     for (int trial = 0; trial < 400; trial++) {
         np_body a, b;

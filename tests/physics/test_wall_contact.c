@@ -147,7 +147,7 @@ static int run_wall(pd_mesh *wall, const double xw[3], const double qw[4], int n
     }
     int pts_cap = ovl_pts_cap(maxt, maxt);
     int ilen = np_wall_ilen(cap) + ovl_iscratch_len(maxt, maxt, maxv, maxv);
-    int rlen = np_wall_rlen(cap) + ovl_rscratch_len(maxv, maxv, maxt, pts_cap);
+    int rlen = np_wall_rlen(cap) + ovl_rscratch_len(maxt, maxt, maxv, maxv, pts_cap);
     int *iscr = malloc(sizeof(int) * ilen);
     double *rscr = malloc(sizeof(double) * rlen);
     np_body wb;
