@@ -32,7 +32,8 @@ for d in $DEPTHS; do
         "$BIN" rock "$t" "$d" 1 --min-time "$MIN_TIME" | tee -a "$OUT/scaling.csv"
     done
     for t in $HIGH_TRIS; do
-        "$BIN" rock "$t" "$d" 1 --min-time "$MIN_TIME" --no-filter-off | tee -a "$OUT/scaling.csv"
+        "$BIN" rock "$t" "$d" 1 --min-time "$MIN_TIME" --no-filter-off |
+            tee -a "$OUT/scaling.csv"
     done
 done
 "$PY" "$HERE/plot.py" "$OUT"
