@@ -1085,9 +1085,8 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         c->near_b[c->nb++] = u;
     }
     if (c->filter && c->nb >= OVL_STRIP_MIN) {
-        /* the pair loop's sweep (ovl_ctx): the axis d is least aligned with, across the contact */
-        pd_v3 ad = v3(PD_FABS(d.x), PD_FABS(d.y), PD_FABS(d.z));
-        int a = ad.x <= ad.y && ad.x <= ad.z ? 0 : ad.y <= ad.z ? 1 : 2;
+        /* the pair loop's sweep (ovl_ctx), across the contact */
+        int a = ovl_least_axis(d);
         pd_real width = PD_R(0);
         for (int l = 0; l < c->nb; l++) {
             PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;

@@ -430,14 +430,6 @@ PD_FN int ovl_ray_crosses(ovl_ctx *c, pd_v3 p, pd_v3 r, pd_real sp, const pd_v3 
 }
 
 /*
- * Point-in-solid test by ray parity: whether p lies inside the solid whose kept triangles are
- * tri[kept[0..nk)] over vertices vx (A's frame) and whose kept part lies in the box [lo, hi],
- * counting crossings of the ray from p along sp d (all it can meet are kept, by the half-plane
- * filter). B is the body displaced by +eps w, so relative to the tested solid p moves by
- * sp eps w: sp = -1 for A's points tested against B, +1 for B's against A; sp fixes every
- * tie-break below as in ovl_side_a/_b.
- */
-/*
  * Sorts an index list ascending in place: insertion sort for the short, nearly sorted lists of a
  * DEM contact, Shell sort beyond (no recursion, no extra memory).
  */
@@ -484,15 +476,20 @@ PD_FN int ovl_first_key(PD_GLOBAL const pd_real *key, int n, pd_real x)
     return a;
 }
 
+/* The coordinate axis (0, 1, 2) that d is least aligned with: the strip's eu and the pair
+ * loop's sweep run across d, the direction the contact is pressed along. */
+PD_FN int ovl_least_axis(pd_v3 d)
+{
+    pd_v3 ad = v3(PD_FABS(d.x), PD_FABS(d.y), PD_FABS(d.z));
+    return ad.x <= ad.y && ad.x <= ad.z ? 0 : ad.y <= ad.z ? 1 : 2;
+}
+
 PD_FN void ovl_strip_build(const ovl_ctx *c, ovl_strip *s, PD_GLOBAL const int *tri,
                            PD_GLOBAL const int *kept, int nk, PD_GLOBAL const pd_real *vx)
 {
     /* eu: d crossed with the axis it is least aligned with */
-    pd_v3 d = c->d, ad = v3(PD_FABS(d.x), PD_FABS(d.y), PD_FABS(d.z));
-    pd_v3 ax = ad.x <= ad.y && ad.x <= ad.z ? v3(1, 0, 0)
-               : ad.y <= ad.z               ? v3(0, 1, 0)
-                                            : v3(0, 0, 1);
-    s->eu = v3_unit(v3_cross(d, ax));
+    int a = ovl_least_axis(c->d);
+    s->eu = v3_unit(v3_cross(c->d, v3(a == 0, a == 1, a == 2)));
     pd_real width = PD_R(0);
     for (int k = 0; k < nk; k++) {
         int t = kept[k];
@@ -509,6 +506,14 @@ PD_FN void ovl_strip_build(const ovl_ctx *c, ovl_strip *s, PD_GLOBAL const int *
     s->built = 1;
 }
 
+/*
+ * Point-in-solid test by ray parity: whether p lies inside the solid whose kept triangles are
+ * tri[kept[0..nk)] over vertices vx (A's frame) and whose kept part lies in the box [lo, hi],
+ * counting crossings of the ray from p along sp d (all it can meet are kept, by the half-plane
+ * filter). B is the body displaced by +eps w, so relative to the tested solid p moves by
+ * sp eps w: sp = -1 for A's points tested against B, +1 for B's against A; sp fixes every
+ * tie-break below as in ovl_side_a/_b.
+ */
 PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, PD_GLOBAL const int *tri, PD_GLOBAL const int *kept,
                          int nk, PD_GLOBAL const pd_real *vx, pd_real sp, pd_v3 lo, pd_v3 hi,
                          ovl_strip *s)
