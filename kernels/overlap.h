@@ -190,7 +190,8 @@ PD_FN int ovl_vertex_in_a(ovl_ctx *c, int j)
 typedef struct ovl_tri {
     int id[3];
     pd_v3 p[3];
-    pd_v3 nraw; /* (p1 - p0) x (p2 - p0) */
+    pd_v3 nraw;   /* (p1 - p0) x (p2 - p0) */
+    pd_real ptol; /* snap bound of sides of its plane (ovl_plane_tol); set by the pair loop */
     pd_v3 lo, hi;
     int full;
     pd_v3 nu;    /* unit outward normal */
@@ -209,6 +210,7 @@ PD_FN void ovl_tri_make(ovl_tri *t, pd_v3 p0, pd_v3 p1, pd_v3 p2, pd_real pad)
     t->full = 0;
     t->edges = 0;
     t->nu = t->nraw; /* set by ovl_tri_full; initialised for the compilers' flow analysis */
+    t->ptol = PD_R(0);
     /* Culling is a predicate too: pad by the resolution so boxes that touch to within rounding
      * reach the symbolic tests instead of being rejected by noise. */
     t->lo = v3(pd_min(pd_min(p0.x, p1.x), p2.x) - pad, pd_min(pd_min(p0.y, p1.y), p2.y) - pad,
@@ -262,6 +264,7 @@ PD_FN void ovl_tri_cached(ovl_tri *t, const ovl_ctx *c, PD_GLOBAL const pd_real 
     for (int q = 0; q < 3; q++)
         t->p[q] = ovl_vb(c, t->id[q]);
     t->nraw = v3(uc[0], uc[1], uc[2]);
+    t->ptol = uc[18];
     t->lo = v3(uc[3], uc[4], uc[5]);
     t->hi = v3(uc[6], uc[7], uc[8]);
     t->me[0] = v3(uc[9], uc[10], uc[11]);
@@ -321,14 +324,16 @@ PD_FN int ovl_crossing_node(ovl_ctx *c, const ovl_tri *T, int k, int lo, pd_v3 p
 }
 
 /*
- * Error bound (max-norm) of ovl_cross_point's node: the side values carry up to tol3 each, which
- * moves the node along the edge by |a1 - a0| tol3 / |s0 - s1|; plus the coordinates' own rounding.
+ * Error bound (max-norm) of ovl_cross_point's node: the side values carry up to the plane's snap
+ * bound tol each, which moves the node along the edge by |a1 - a0| tol / |s0 - s1|; plus the
+ * coordinates' own rounding.
  */
-PD_FN pd_real ovl_cross_err(const ovl_ctx *c, pd_v3 a0, pd_v3 a1, pd_real s0, pd_real s1)
+PD_FN pd_real ovl_cross_err(const ovl_ctx *c, pd_v3 a0, pd_v3 a1, pd_real s0, pd_real s1,
+                            pd_real tol)
 {
     pd_real ds = PD_FABS(s0 - s1);
     pd_real len = v3_amax(v3_sub(a1, a0));
-    return ds > PD_R(0) ? c->pad + PD_R(2) * len * c->tol3 / ds : PD_REAL_MAX;
+    return ds > PD_R(0) ? c->pad + PD_R(2) * len * tol / ds : PD_REAL_MAX;
 }
 
 /* The corner alone on its side of a plane, given three sides (+-1); 3 when all are equal. */
@@ -352,7 +357,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
     int sa[3], sb[3];
     /* a triangle wholly on one side of the other's plane: no edge of either crosses the other */
     for (int k = 0; k < 3; k++)
-        sa[k] = ovl_side_a(c, T->p[k], U->p[0], U->nraw, &qa[k]);
+        sa[k] = ovl_side_a(c, T->p[k], U->p[0], U->nraw, U->ptol, &qa[k]);
     /*
      * Both triangles' sides first, then one branch (lone 3: all on one side): the two rejections
      * are unpredictable, and one mispredicted branch cost more than U's sides (bench/RESULTS.md).
@@ -361,7 +366,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
      */
     int dg = c->degenerate, la = ovl_lone(sa), t_cross = la < 3;
     for (int k = 0; k < 3; k++)
-        sb[k] = ovl_side_b(c, U->p[k], T->p[0], T->nraw, &qb[k]);
+        sb[k] = ovl_side_b(c, U->p[k], T->p[0], T->nraw, T->ptol, &qb[k]);
     c->degenerate = dg | (c->degenerate & t_cross);
     int lb = ovl_lone(sb);
     if (!(t_cross & (lb < 3))) return;
@@ -381,7 +386,8 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         int i = T->id[k], j = T->id[k1];
         int lo = i < j ? k : k1; /* the canonical end, chosen by index (no branch) */
         pd_v3 p = ovl_cross_point(T->p[lo], T->p[k + k1 - lo], qa[lo], qa[k + k1 - lo]);
-        int in = ovl_point_in_tri(U, p, ovl_cross_err(c, T->p[k], T->p[k1], qa[k], qa[k1]));
+        int in =
+            ovl_point_in_tri(U, p, ovl_cross_err(c, T->p[k], T->p[k1], qa[k], qa[k1], U->ptol));
         /* near U's edges: the edge's line passes inside U when it turns the same way about all
          * three of U's edges (exact canonical predicates) */
         if (in == 0) {
@@ -403,7 +409,8 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         int i = U->id[k], j = U->id[k1];
         int lo = i < j ? k : k1;
         pd_v3 p = ovl_cross_point(U->p[lo], U->p[k + k1 - lo], qb[lo], qb[k + k1 - lo]);
-        int in = ovl_point_in_tri(T, p, ovl_cross_err(c, U->p[k], U->p[k1], qb[k], qb[k1]));
+        int in =
+            ovl_point_in_tri(T, p, ovl_cross_err(c, U->p[k], U->p[k1], qb[k], qb[k1], T->ptol));
         if (in == 0) {
             /* det(u_j - u_i, t_a - u_i, t_b - u_i) equals the orientation of T's edge a->b
              * against U's edge i->j, so the shared canonical predicate decides both tests */
@@ -486,6 +493,7 @@ PD_FN void ovl_pass(ovl_ctx *c)
                 nh += ovl_boxes_meet(T.lo, T.hi, v3_load(uc, 1), v3_load(uc, 2));
             }
         }
+        if (nh > 0) T.ptol = ovl_plane_tol(c, T.p[0], T.p[1], T.p[2]);
         for (int h = 0; h < nh; h++) {
             int l = c->hits[h];
             PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
@@ -884,7 +892,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->nd_i = in->iscr + ovl_iscratch_len(in->nta, in->ntb, in->nva, in->nvb);
     c->nd_r = in->rscr + ovl_rscratch_len(in->nta, in->ntb, in->nva, in->nvb, in->pts_cap);
     c->flip = c->degenerate = c->depth_mode = 0;
-    c->pad = c->tol2 = c->tol3 = PD_R(0);
+    c->pad = PD_R(0);
     c->ka = c->kb = c->na = c->nb = 0;
     c->origin_in_b = -1;
     int open_b = (in->flags & OVL_OPEN_B) != 0;
@@ -1023,8 +1031,6 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     pd_real lsc = pd_max(pd_max(v3_amax(alo), v3_amax(ahi)), pd_max(v3_amax(blo), v3_amax(bhi)));
     /* the resolution: coordinates carry about OVL_SNAP * L of rounding from the transforms */
     c->pad = OVL_SNAP * lsc;
-    c->tol2 = c->pad * lsc;
-    c->tol3 = c->tol2 * lsc;
 
     /*
      * Every node of A n B lies in both solids' parts inside the slab, and a solid's part inside
@@ -1082,6 +1088,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
                       U.me[2]};
         for (int q = 0; q < 6; q++)
             v3_store(uc, q, v[q]);
+        uc[18] = ovl_plane_tol(c, U.p[0], U.p[1], U.p[2]);
         c->near_b[c->nb++] = u;
     }
     if (c->filter && c->nb >= OVL_STRIP_MIN) {

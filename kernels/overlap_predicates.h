@@ -76,8 +76,9 @@
  * exact arithmetic.
  */
 #define OVL_ORIGIN 16
-/* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals. */
-#define OVL_TRI_CACHE 18
+/* Reals cached per near triangle of B: raw normal, box (lo, hi), raw inward edge normals, the
+ * snap bound of its plane (ovl_plane_tol). */
+#define OVL_TRI_CACHE 19
 /* Reals in a kernel's result record (ovl_out_store; OVL_RESULT_LEN on the host). */
 #define OVL_OUT_LEN 18
 
@@ -226,10 +227,9 @@ typedef struct ovl_ctx {
     int node_org; /* OVL_RESCUE: each node's cusps are taken about its place's centre (ORG) */
     PD_GLOBAL int *nd_i;
     PD_GLOBAL pd_real *nd_r;
-    pd_real pad;        /* OVL_SNAP * L: the configuration's length resolution */
-    pd_real tol2, tol3; /* snap bounds for determinants of length^2 and length^3 */
-    int flip;           /* 0: B displaced by +eps w, 1: by -eps w */
-    int degenerate;     /* a predicate was exactly zero */
+    pd_real pad;    /* OVL_SNAP * L: the configuration's length resolution */
+    int flip;       /* 0: B displaced by +eps w, 1: by -eps w */
+    int degenerate; /* a predicate was exactly zero */
     /* cusp sums, about `origin` (A's frame origin, or the nodes' centre when re-summed) */
     pd_v3 origin;
     pd_real vol;
@@ -259,6 +259,28 @@ PD_FN PD_GLOBAL pd_real *ovl_ndr(const ovl_ctx *c, int k)
 PD_FN pd_real ovl_det(pd_v3 a, pd_v3 b, pd_v3 c)
 {
     return v3_dot(a, v3_cross(b, c));
+}
+
+/*
+ * Snap bounds. Every predicate below is a determinant whose value is a distance times the lengths
+ * of the edges it is taken against: a point's side of a triangle's plane is its distance times
+ * |(v1 - v0) x (v2 - v0)|, a line's side of an edge is their distance times the edge's length.
+ * Each is snapped to a tie when that distance is within the resolution pad, so its bound scales
+ * with its own edges, not with the configuration's size L: bounds of pad L^2 and pad L^3 snapped
+ * the predicates of a triangle of edge e at distances of pad (L / e)^2, which for 20 000-triangle
+ * rocks in single precision reached ~5e-3 L, where the ties, each broken on its own, no longer
+ * described one geometry: their overlaps' volumes came out wrong by up to 200 times
+ * (bench/RESULTS.md). The bounds still exceed each determinant's own
+ * rounding (a few ulps of its operands' products, the operands within 2 sqrt(3) L of each other)
+ * by more than ten times, so a decision outside them is the exact one for the coordinates given.
+ */
+PD_FN pd_real ovl_plane_tol_of(const ovl_ctx *c, pd_real a1, pd_real a2)
+{
+    return PD_R(2) * c->pad * a1 * a2; /* a1, a2: max-norms of v1 - v0 and v2 - v0 */
+}
+PD_FN pd_real ovl_plane_tol(const ovl_ctx *c, pd_v3 v0, pd_v3 v1, pd_v3 v2)
+{
+    return ovl_plane_tol_of(c, v3_amax(v3_sub(v1, v0)), v3_amax(v3_sub(v2, v0)));
 }
 
 /*
@@ -300,15 +322,17 @@ PD_FN pd_v3 ovl_vb(const ovl_ctx *c, int j)
 
 /*
  * Orientation of A's edge a0->a1 against B's edge b0->b1, both canonical (lower index first):
- * sign of det(a1 - a0, b0 - a0, b1 - a0) with B displaced. The eps term is
- * det(a1 - a0, w, b1 - b0) = w . ((b1 - b0) x (a1 - a0)).
+ * sign of det(a1 - a0, b0 - a0, b1 - a0) = det(a1 - a0, b0 - a0, b1 - b0) (the lines' distance
+ * times |da x db|; evaluated in the second form, whose rounding is relative to the edges' lengths)
+ * with B displaced. The eps term is det(a1 - a0, w, b1 - b0) = w . ((b1 - b0) x (a1 - a0)).
  */
 PD_FN int ovl_edge_edge(ovl_ctx *c, int ia0, int ia1, int ib0, int ib1)
 {
     pd_v3 a0 = ovl_va(c, ia0), da = v3_sub(ovl_va(c, ia1), a0);
-    pd_v3 b0 = ovl_vb(c, ib0), b1 = ovl_vb(c, ib1);
-    int s = ovl_sign(ovl_det(da, v3_sub(b0, a0), v3_sub(b1, a0)), c->tol3);
-    return s ? s : ovl_tie(c, v3_cross(v3_sub(b1, b0), da));
+    pd_v3 b0 = ovl_vb(c, ib0), db = v3_sub(ovl_vb(c, ib1), b0);
+    pd_real tol = PD_R(2) * c->pad * v3_amax(da) * v3_amax(db);
+    int s = ovl_sign(ovl_det(da, v3_sub(b0, a0), db), tol);
+    return s ? s : ovl_tie(c, v3_cross(db, da));
 }
 
 /* Directed edge-edge orientation from canonical evaluation: A edge i->j against B edge k->l. */
@@ -319,19 +343,21 @@ PD_FN int ovl_edge_edge_dir(ovl_ctx *c, int i, int j, int k, int l)
     return s * ovl_edge_edge(c, i < j ? i : j, i < j ? j : i, k < l ? k : l, k < l ? l : k);
 }
 
-/* Side of A's point p against B's triangle plane (u0, raw normal nu): eps term is -w . nu. */
-PD_FN int ovl_side_a(ovl_ctx *c, pd_v3 p, pd_v3 u0, pd_v3 nu, pd_real *q0)
+/* Side of A's point p against B's triangle plane (u0, raw normal nu, snap bound tol from
+ * ovl_plane_tol): eps term is -w . nu. */
+PD_FN int ovl_side_a(ovl_ctx *c, pd_v3 p, pd_v3 u0, pd_v3 nu, pd_real tol, pd_real *q0)
 {
     *q0 = v3_dot(v3_sub(p, u0), nu);
-    int s = ovl_sign(*q0, c->tol3);
+    int s = ovl_sign(*q0, tol);
     return s ? s : ovl_tie(c, v3_scale(nu, PD_R(-1)));
 }
 
-/* Side of B's point u against A's triangle plane (t0, raw normal nt): eps term is +w . nt. */
-PD_FN int ovl_side_b(ovl_ctx *c, pd_v3 u, pd_v3 t0, pd_v3 nt, pd_real *q0)
+/* Side of B's point u against A's triangle plane (t0, raw normal nt, bound tol): eps term is
+ * +w . nt. */
+PD_FN int ovl_side_b(ovl_ctx *c, pd_v3 u, pd_v3 t0, pd_v3 nt, pd_real tol, pd_real *q0)
 {
     *q0 = v3_dot(v3_sub(u, t0), nt);
-    int s = ovl_sign(*q0, c->tol3);
+    int s = ovl_sign(*q0, tol);
     return s ? s : ovl_tie(c, nt);
 }
 
@@ -398,33 +424,47 @@ PD_FN int ovl_line_through(ovl_ctx *c, pd_v3 p, pd_v3 r, pd_real sp, const pd_v3
         if (e > 0 && sg[e - 1] != sg[0]) return 0; /* turns differ: the line misses */
         int e1 = (e + 1) % 3;
         int k0 = id[e], k1 = id[e1];
-        pd_v3 b0 = k0 < k1 ? v[e] : v[e1], b1 = k0 < k1 ? v[e1] : v[e];
-        /* det(r, b0 - q, b1 - q) for q = p + sp eps w: eps term -sp w . ((b1 - b0) x r) */
-        int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), v3_sub(b1, p)), c->tol2);
-        if (!sv) sv = ovl_tie(c, v3_scale(v3_cross(v3_sub(b1, b0), r), -sp));
+        pd_v3 b0 = k0 < k1 ? v[e] : v[e1], db = v3_sub(k0 < k1 ? v[e1] : v[e], b0);
+        /* det(r, b0 - q, b1 - q) = det(r, b0 - q, b1 - b0) for q = p + sp eps w: the line's
+         * distance from the edge times the edge's length across r; eps term
+         * -sp w . ((b1 - b0) x r) */
+        int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), db), PD_R(2) * c->pad * v3_amax(db));
+        if (!sv) sv = ovl_tie(c, v3_scale(v3_cross(db, r), -sp));
         sg[e] = k0 < k1 ? sv : -sv;
     }
     return sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2];
 }
 
-/* Side of point p (displaced by sp eps w) against the plane through v0 with raw normal n. */
-PD_FN int ovl_point_side(ovl_ctx *c, pd_v3 p, pd_v3 v0, pd_v3 n, pd_real sp)
+/* Side of point p (displaced by sp eps w) against the plane through v0 with raw normal n, snap
+ * bound tol (ovl_plane_tol). */
+PD_FN int ovl_point_side(ovl_ctx *c, pd_v3 p, pd_v3 v0, pd_v3 n, pd_real tol, pd_real sp)
 {
     /* (p - v0) . n with p displaced by sp eps w: eps term sp w . n */
-    int s = ovl_sign(v3_dot(v3_sub(p, v0), n), c->tol3);
+    int s = ovl_sign(v3_dot(v3_sub(p, v0), n), tol);
     return s ? s : ovl_tie(c, v3_scale(n, sp));
+}
+
+/*
+ * Whether a line along unit r is parallel to the plane of a triangle (raw normal n, max-norms a1
+ * and a2 of its edges from corner 0) to within the resolution: r . n = |n| sin(angle), and the
+ * plane's direction is known to about pad over the edges' lengths.
+ */
+PD_FN int ovl_parallel(const ovl_ctx *c, pd_real rn, pd_real a1, pd_real a2)
+{
+    return PD_FABS(rn) <= c->pad * (a1 + a2);
 }
 
 /* Whether the ray from p along unit r crosses the triangle v[] (ids id[]); sp as above. */
 PD_FN int ovl_ray_crosses(ovl_ctx *c, pd_v3 p, pd_v3 r, pd_real sp, const pd_v3 v[3],
                           const int id[3])
 {
-    pd_v3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
-    pd_real rn = v3_dot(r, n);
+    pd_v3 e1 = v3_sub(v[1], v[0]), e2 = v3_sub(v[2], v[0]);
+    pd_v3 n = v3_cross(e1, e2);
+    pd_real rn = v3_dot(r, n), a1 = v3_amax(e1), a2 = v3_amax(e2);
     /* a ray parallel to the plane, to within rounding, never crosses it (exactly parallel it
      * would cross only if it lay in the plane, which the perturbation rules out) */
-    if (PD_FABS(rn) <= c->tol2) return 0;
-    int s = ovl_point_side(c, p, v[0], n, sp);
+    if (ovl_parallel(c, rn, a1, a2)) return 0;
+    int s = ovl_point_side(c, p, v[0], n, ovl_plane_tol_of(c, a1, a2), sp);
     if ((s > 0) != (rn < PD_R(0))) return 0; /* plane behind the ray's start */
     return ovl_line_through(c, p, r, sp, v, id);
 }
@@ -526,7 +566,10 @@ PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, PD_GLOBAL const int *tri, PD_GLOBA
         if (!s->built) ovl_strip_build(c, s, tri, kept, nk, vx);
         /* the triangles whose extent along eu, widened by 4 resolutions (as the boxes are by
          * one; the coordinates along eu carry a few ulps of L), holds the ray's: keys from
-         * u - width - m to u + m */
+         * u - width - m to u + m. ovl_line_through snaps within 2 pad |e| / |e across r| of an
+         * edge e: beyond this margin only for edges within 30 degrees of the ray, where a tie
+         * could fall to a skipped triangle (never seen: with and without the strip and boxes,
+         * 1 920 single-precision pairs of up to 20 000 triangles agree; bench/RESULTS.md) */
         pd_real u = v3_dot(p, s->eu), m = PD_R(4) * c->pad;
         k0 = ovl_first_key(s->key, nk, u - s->width - m);
         for (k1 = k0; k1 < nk && s->key[k1] <= u + m; k1++)
@@ -635,10 +678,14 @@ PD_FN int ovl_open_inside_b(ovl_ctx *c, pd_v3 p)
         int id[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
         pd_v3 v[3] = {ovl_vb(c, id[0]), ovl_vb(c, id[1]), ovl_vb(c, id[2])};
         if (!ovl_tri_meets(v[0], v[1], v[2], slo, shi)) continue;
-        pd_v3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
-        if (PD_FABS(v3_dot(r, n)) <= c->tol2) continue; /* parallel: as in ovl_ray_crosses */
+        pd_v3 e1 = v3_sub(v[1], v[0]), e2 = v3_sub(v[2], v[0]);
+        pd_v3 n = v3_cross(e1, e2);
+        pd_real a1 = v3_amax(e1), a2 = v3_amax(e2);
+        if (ovl_parallel(c, v3_dot(r, n), a1, a2)) continue; /* as in ovl_ray_crosses */
         /* both ends are A's points: the segment crosses the plane when they lie on either side */
-        if (ovl_point_side(c, p, v[0], n, PD_R(-1)) == ovl_point_side(c, o, v[0], n, PD_R(-1)))
+        pd_real tol = ovl_plane_tol_of(c, a1, a2);
+        if (ovl_point_side(c, p, v[0], n, tol, PD_R(-1)) ==
+            ovl_point_side(c, o, v[0], n, tol, PD_R(-1)))
             continue;
         odd ^= ovl_line_through(c, p, r, PD_R(-1), v, id);
     }

@@ -648,6 +648,55 @@ TEST(single_precision_close_to_double)
 }
 
 /*
+ * Fine meshes: 1280- and 5120-triangle shapes pressed 1 % of their size deep at random poses.
+ * Each predicate's snap bound once scaled with the configuration's size L instead of its own
+ * edges, so a point within pad (L / e)^2 of a plane counted as on it: harmless in double, but in
+ * single precision ~1e-3 of a size for 5120-triangle rocks, whose volumes came out 3 % wrong at
+ * the median and up to 90 times the true one (bench/RESULTS.md). The tolerance is the test
+ * above's 1e-7 size^3 / V with V ~ 1e-3 of the volume: 1e-4, with a factor of ten to spare.
+ */
+TEST(single_precision_close_to_double_on_fine_meshes)
+{
+    const char *names[] = {"icosphere", "rock"};
+    int tris[] = {1280, 5120};
+    for (int k = 0; k < 2; k++) {
+        pd_mesh *m = builtin(names[k], tris[k]);
+        pd_mass_props mp;
+        pd_mesh_mass_props(m, &mp);
+        double size = cbrt(6 * mp.volume / PI), worst = 0;
+        for (int trial = 0; trial < 6; trial++) {
+            pd_pose pa = ORIGIN, pb = near_pose(1);
+            rnd_quat(pa.q);
+            double u[3] = {pb.x[0], pb.x[1], pb.x[2]}, lo = 0, hi = 2 * size;
+            pd_contact d;
+            for (int it = 0; it < 30; it++) { /* depth(lo) > 1 % of the size >= depth(hi) */
+                double mid = 0.5 * (lo + hi);
+                for (int q = 0; q < 3; q++)
+                    pb.x[q] = mid * u[q];
+                d = overlap(m, pa, m, pb, 0);
+                if (d.hit && d.depth > 0.01 * size)
+                    lo = mid;
+                else
+                    hi = mid;
+            }
+            for (int q = 0; q < 3; q++)
+                pb.x[q] = lo * u[q];
+            d = overlap(m, pa, m, pb, 0);
+            pd_contact s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
+            CHECK(d.hit && s.hit);
+            if (!d.hit || !s.hit) continue;
+            CHECK_REL(d.volume, s.volume, 1e-3);
+            CHECK_VEC(d.normal[0], d.normal[1], d.normal[2], s.normal, 1e-3);
+            double e = fabs(s.volume / d.volume - 1);
+            worst = e > worst ? e : worst;
+        }
+        printf("  %s %d: single against double, worst volume %.1e relative\n", names[k], tris[k],
+               worst);
+        pd_mesh_destroy(m);
+    }
+}
+
+/*
  * A cube's corner pressed h into another's face, along its body diagonal: the overlap is the
  * corner's trirectangular tetrahedron with legs sqrt(3) h, V = (sqrt(3)/2) h^3. Its cusps reach
  * from A's centre, so they are of the order of the cube whatever h; summed there, single
@@ -837,7 +886,9 @@ TEST(places_agree_when_the_solids_swap)
         multi += ab.places > 1;
         CHECK(ab.places >= 1);
         CHECK_EQ_INT(ab.places, ba.places);
-        CHECK_REL(ab.effective_volume, ba.effective_volume, 1e-9);
+        /* the two frames round the cusps differently: 1e-9 relative, and ~1e-15 m^3 absolute,
+         * a few ulps of cusps of these solids' size (a 4.7e-8 m^3 overlap differed by 4.6e-16) */
+        CHECK_NEAR(ab.effective_volume, ba.effective_volume, 1e-9 * ab.effective_volume + 1e-14);
         CHECK_REL(ab.effective_depth, ba.effective_depth, 1e-9);
         /* a place's centroid is its moment over its volume, both summed from cusps of the
          * solids' size, so a small place's carries their rounding over its volume (1e-9 m
@@ -924,6 +975,7 @@ int main(void)
     RUN(rock_against_closed_wall_mesh);
     RUN(icosphere_overlap_converges_to_spherical_caps);
     RUN(single_precision_close_to_double);
+    RUN(single_precision_close_to_double_on_fine_meshes);
     RUN(corner_into_face_at_small_depths);
     RUN(first_origin_leaves_the_overlap_unchanged);
     RUN(separate_places_of_a_u_on_a_tilted_slab);
