@@ -493,7 +493,7 @@ PD_FN void ovl_pass(ovl_ctx *c)
                 nh += ovl_boxes_meet(T.lo, T.hi, v3_load(uc, 1), v3_load(uc, 2));
             }
         }
-        if (nh > 0) T.ptol = ovl_plane_tol(c, T.p[0], T.p[1], T.p[2]);
+        if (nh > 0) T.ptol = ovl_plane_tol(c, v3_norm(T.nraw));
         for (int h = 0; h < nh; h++) {
             int l = c->hits[h];
             PD_GLOBAL const pd_real *uc = c->ucache + OVL_TRI_CACHE * l;
@@ -1088,7 +1088,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
                       U.me[2]};
         for (int q = 0; q < 6; q++)
             v3_store(uc, q, v[q]);
-        uc[18] = ovl_plane_tol(c, U.p[0], U.p[1], U.p[2]);
+        uc[18] = ovl_plane_tol(c, v3_norm(U.nraw));
         c->near_b[c->nb++] = u;
     }
     if (c->filter && c->nb >= OVL_STRIP_MIN) {

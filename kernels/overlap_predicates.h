@@ -264,23 +264,24 @@ PD_FN pd_real ovl_det(pd_v3 a, pd_v3 b, pd_v3 c)
 /*
  * Snap bounds. Every predicate below is a determinant whose value is a distance times the lengths
  * of the edges it is taken against: a point's side of a triangle's plane is its distance times
- * |(v1 - v0) x (v2 - v0)|, a line's side of an edge is their distance times the edge's length.
- * Each is snapped to a tie when that distance is within the resolution pad, so its bound scales
- * with its own edges, not with the configuration's size L: bounds of pad L^2 and pad L^3 snapped
- * the predicates of a triangle of edge e at distances of pad (L / e)^2, which for 20 000-triangle
- * rocks in single precision reached ~5e-3 L, where the ties, each broken on its own, no longer
- * described one geometry: their overlaps' volumes came out wrong by up to 200 times
- * (bench/RESULTS.md). The bounds still exceed each determinant's own
- * rounding (a few ulps of its operands' products, the operands within 2 sqrt(3) L of each other)
- * by more than ten times, so a decision outside them is the exact one for the coordinates given.
+ * |n| = |(v1 - v0) x (v2 - v0)|, a line's side of an edge is their distance times the edge's
+ * length. Each is snapped to a tie when that distance is within about the resolution pad, so its
+ * bound scales with its own edges, not with the configuration's size L: bounds of pad L^2 and
+ * pad L^3 snapped the predicates of a triangle of edge e at distances of pad (L / e)^2, which for
+ * 20 000-triangle rocks in single precision reached ~5e-3 L, where the ties, each broken on its
+ * own, no longer described one geometry: their overlaps' volumes came out wrong by up to 200
+ * times (bench/RESULTS.md). The bounds still exceed each determinant's own rounding (a few ulps
+ * of its operands' products, the operands within 2 sqrt(3) L of each other) by more than ten
+ * times, so a decision outside them is the exact one for the coordinates given.
+ *
+ * A plane's bound is 2 pad |n|, the Euclidean length: it must not depend on the frame's axes,
+ * or coplanar triangles of one wall would disagree about a point's side. Bounds from the edges'
+ * max-norms, tried first, did: a prism resting on a floor meshed in squares had corners within
+ * the resolution by one triangle of the floor and outside it by the next, and got a 4 200 N kick.
  */
-PD_FN pd_real ovl_plane_tol_of(const ovl_ctx *c, pd_real a1, pd_real a2)
+PD_FN pd_real ovl_plane_tol(const ovl_ctx *c, pd_real nn)
 {
-    return PD_R(2) * c->pad * a1 * a2; /* a1, a2: max-norms of v1 - v0 and v2 - v0 */
-}
-PD_FN pd_real ovl_plane_tol(const ovl_ctx *c, pd_v3 v0, pd_v3 v1, pd_v3 v2)
-{
-    return ovl_plane_tol_of(c, v3_amax(v3_sub(v1, v0)), v3_amax(v3_sub(v2, v0)));
+    return PD_R(2) * c->pad * nn; /* nn: |n| */
 }
 
 /*
@@ -445,26 +446,25 @@ PD_FN int ovl_point_side(ovl_ctx *c, pd_v3 p, pd_v3 v0, pd_v3 n, pd_real tol, pd
 }
 
 /*
- * Whether a line along unit r is parallel to the plane of a triangle (raw normal n, max-norms a1
- * and a2 of its edges from corner 0) to within the resolution: r . n = |n| sin(angle), and the
- * plane's direction is known to about pad over the edges' lengths.
+ * Whether a line along unit r is parallel to the plane of a triangle (raw normal n of length nn)
+ * to within the resolution: r . n = |n| sin(angle), and the plane's direction is known to about
+ * pad over the triangle's size sqrt(|n|) (so that coplanar triangles of equal size agree).
  */
-PD_FN int ovl_parallel(const ovl_ctx *c, pd_real rn, pd_real a1, pd_real a2)
+PD_FN int ovl_parallel(const ovl_ctx *c, pd_real rn, pd_real nn)
 {
-    return PD_FABS(rn) <= c->pad * (a1 + a2);
+    return rn * rn <= c->pad * c->pad * nn;
 }
 
 /* Whether the ray from p along unit r crosses the triangle v[] (ids id[]); sp as above. */
 PD_FN int ovl_ray_crosses(ovl_ctx *c, pd_v3 p, pd_v3 r, pd_real sp, const pd_v3 v[3],
                           const int id[3])
 {
-    pd_v3 e1 = v3_sub(v[1], v[0]), e2 = v3_sub(v[2], v[0]);
-    pd_v3 n = v3_cross(e1, e2);
-    pd_real rn = v3_dot(r, n), a1 = v3_amax(e1), a2 = v3_amax(e2);
+    pd_v3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
+    pd_real rn = v3_dot(r, n), nn = v3_norm(n);
     /* a ray parallel to the plane, to within rounding, never crosses it (exactly parallel it
      * would cross only if it lay in the plane, which the perturbation rules out) */
-    if (ovl_parallel(c, rn, a1, a2)) return 0;
-    int s = ovl_point_side(c, p, v[0], n, ovl_plane_tol_of(c, a1, a2), sp);
+    if (ovl_parallel(c, rn, nn)) return 0;
+    int s = ovl_point_side(c, p, v[0], n, ovl_plane_tol(c, nn), sp);
     if ((s > 0) != (rn < PD_R(0))) return 0; /* plane behind the ray's start */
     return ovl_line_through(c, p, r, sp, v, id);
 }
@@ -678,12 +678,11 @@ PD_FN int ovl_open_inside_b(ovl_ctx *c, pd_v3 p)
         int id[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
         pd_v3 v[3] = {ovl_vb(c, id[0]), ovl_vb(c, id[1]), ovl_vb(c, id[2])};
         if (!ovl_tri_meets(v[0], v[1], v[2], slo, shi)) continue;
-        pd_v3 e1 = v3_sub(v[1], v[0]), e2 = v3_sub(v[2], v[0]);
-        pd_v3 n = v3_cross(e1, e2);
-        pd_real a1 = v3_amax(e1), a2 = v3_amax(e2);
-        if (ovl_parallel(c, v3_dot(r, n), a1, a2)) continue; /* as in ovl_ray_crosses */
+        pd_v3 n = v3_cross(v3_sub(v[1], v[0]), v3_sub(v[2], v[0]));
+        pd_real nn = v3_norm(n);
+        if (ovl_parallel(c, v3_dot(r, n), nn)) continue; /* as in ovl_ray_crosses */
         /* both ends are A's points: the segment crosses the plane when they lie on either side */
-        pd_real tol = ovl_plane_tol_of(c, a1, a2);
+        pd_real tol = ovl_plane_tol(c, nn);
         if (ovl_point_side(c, p, v[0], n, tol, PD_R(-1)) ==
             ovl_point_side(c, o, v[0], n, tol, PD_R(-1)))
             continue;
