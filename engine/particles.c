@@ -166,8 +166,9 @@ int sc_particles_create(const pd_scenario *s, sc_particles **out, pd_error *err)
     p->material = malloc(sizeof(int) * n);
     if (!p->x || !p->q || !p->v || !p->w || !p->size || !p->mass || !p->inertia || !p->shape ||
         !p->material) {
+        long n_want = p->n; /* p is freed below */
         sc_particles_destroy(p);
-        return pd_error_set(err, PD_ENOMEM, "particles: out of memory for %ld particles", p->n);
+        return pd_error_set(err, PD_ENOMEM, "particles: out of memory for %ld particles", n_want);
     }
     rng r = {s->seed * 0x9e3779b97f4a7c15ull + 1};
     long first = 0;
