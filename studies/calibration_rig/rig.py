@@ -40,13 +40,31 @@ TOP_BIN = 2                # the pile's top in the third
 SETTLE_1 = 0.06           # s, phase 1: the doors hold the particles while they start falling
 DOOR_SPEED = 1.0          # m/s
 DT = 1e-5                 # Table A.2
+END_H = 0.1               # the end walls' height
+CELL = 0.0139             # the engine's lattice cell: the largest particle's circumscribed diameter
+
+
+def apply_scale(s):
+    """--scale S: every length of the rig across the channel's plane (x and z) times S, the
+    channel's width and the particles kept, so that S^2 times the particles (S^2 the mass) make a
+    pile of the same shape relative to the rig and its height map: Table A.2's 1 kg is about
+    1 400 particles, S = sqrt(1400 / 400) = 1.87."""
+    global EDGE_Z, PLANE_X0, HOP_X, DOOR_Z, PLATE_X, BIN_W, END_H
+    EDGE_Z *= s
+    PLANE_X0 *= s
+    HOP_X = (HOP_X[0] * s, HOP_X[1] * s)
+    DOOR_Z *= s
+    PLATE_X = (PLATE_X[0] * s, PLATE_X[1] * s)
+    BIN_W *= s
+    END_H *= s
 
 
 def hop_top(particles):
     """The hopper's height: room for the lattice the engine places the particles on (cells of
     the largest particle's circumscribed diameter, 13.9 mm at 20 triangles: 11 x 2 per layer in
     the 160 x 40 mm hopper), with a margin."""
-    return DOOR_Z + 0.02 + 0.0145 * math.ceil(particles / 22)
+    per_layer = int((HOP_X[1] - HOP_X[0]) / CELL) * int(W / CELL)
+    return DOOR_Z + 0.02 + 0.0145 * math.ceil(particles / per_layer)
 
 
 def plane_top_z(x):
@@ -91,8 +109,8 @@ def base_scenario(a, doors_open):
         box("bottom", (x0 - 0.01, -W / 2 - 0.01, -0.01), (x1 + 0.01, W / 2 + 0.01, 0)),
         box("side_y0", (x0 - 0.01, -W / 2 - 0.01, 0), (x1 + 0.01, -W / 2, zt)),
         box("side_y1", (x0 - 0.01, W / 2, 0), (x1 + 0.01, W / 2 + 0.01, zt)),
-        box("end_x0", (x0 - 0.01, -W / 2, 0), (x0, W / 2, 0.1)),
-        box("end_x1", (x1, -W / 2, 0), (x1 + 0.01, W / 2, 0.1)),
+        box("end_x0", (x0 - 0.01, -W / 2, 0), (x0, W / 2, END_H)),
+        box("end_x1", (x1, -W / 2, 0), (x1 + 0.01, W / 2, END_H)),
         box("hopper_x0", (HOP_X[0] - 0.01, -W / 2, DOOR_Z - 0.01), (HOP_X[0], W / 2, top)),
         box("hopper_x1", (HOP_X[1], -W / 2, DOOR_Z - 0.01), (HOP_X[1] + 0.01, W / 2, top)),
         box("door_l", (HOP_X[0] - 0.01, -W / 2, DOOR_Z - 0.01), (mid, W / 2, DOOR_Z), **door_kw_l),
@@ -381,11 +399,19 @@ def main():
     ap.add_argument("--contact-places", default="merged", choices=["merged", "separate"],
                     help="thesis section 5.4: one contact per pair, or one per place")
     ap.add_argument("--band", type=float, nargs=2, default=[10, 45])
-    ap.add_argument("--min-height", type=float, default=0.035, help="m, the pile's top")
+    ap.add_argument("--min-height", type=float, default=0.035,
+                    help="m, the pile's top (times --scale)")
+    ap.add_argument("--scale", type=float, default=1.0,
+                    help="the rig's lengths across the channel (apply_scale); 1.87 with 1 400 "
+                    "particles for Table A.2's 1 kg")
     ap.add_argument("--max-creep", type=float, default=0.0025,
                     help="m a pile particle may move over the last frame interval (a tenth of "
                     "phase 2)")
     a = ap.parse_args()
+    if not a.scale > 0:
+        ap.error("--scale must be > 0")
+    apply_scale(a.scale)
+    a.min_height *= a.scale
     {"phase1": phase1, "phase2": phase2, "heightmap": heightmap, "analyze": analyze}[a.cmd](a)
 
 

@@ -27,6 +27,9 @@ case ${1:-} in
 *) echo "usage: $0 [--quick]" >&2; exit 2 ;;
 esac
 PARTICLES=${PARTICLES:-400}
+# SCALE=1.87 PARTICLES=1400: Table A.2's 1 kg, the rig's lengths across the channel scaled so that
+# the pile fits its map as 400 particles' does (rig.py apply_scale)
+SCALE=${SCALE:-1}
 # SEEDS="1 2 3": several runs per resolution (the particles' sizes, places and orientations
 # drawn anew), reported as mean and standard deviation (figure 6.10's 11 runs)
 SEEDS=${SEEDS:-1}
@@ -48,7 +51,7 @@ run() {
     echo $(($(date +%s) - t0))
 }
 echo "calibration_rig: $PARTICLES particles, phase 2 $DURATION s, triangles $TRIS, seeds $SEEDS," \
-    "contact places $PLACES"
+    "contact places $PLACES, rig scale $SCALE"
 echo '{"cases": [' >"$OUT/cases.json"
 sep=
 for t in $TRIS; do
@@ -56,17 +59,19 @@ for t in $TRIS; do
         tag=$t
         [ "$seed" = 1 ] || tag=${t}_s$seed
         "$PY" "$HERE/rig.py" phase1 --triangles "$t" --seed "$seed" --particles "$PARTICLES" \
+            --scale "$SCALE" \
             --contact-places "$PLACES" --out "$OUT"
         s1=$(run "$OUT/rig_${tag}_1.json" "$OUT/rig_${tag}_1.h5")
         "$PY" "$HERE/rig.py" phase2 --triangles "$t" --seed "$seed" --duration "$DURATION" \
+            --scale "$SCALE" \
             --contact-places "$PLACES" --out "$OUT"
         s2=$(run "$OUT/rig_${tag}_2.json" "$OUT/rig_${tag}_2.h5")
         echo "  $t triangles, seed $seed: filling $s1 s, flow and pile $s2 s (wall clock)"
-        "$PY" "$HERE/rig.py" heightmap --triangles "$t" --seed "$seed" --out "$OUT"
+        "$PY" "$HERE/rig.py" heightmap --triangles "$t" --seed "$seed" --scale "$SCALE" --out "$OUT"
         printf '%s{"triangles": %d, "seed": %d, "settle_s": %d, "flow_s": %d, "run_s": %d}\n' \
             "$sep" "$t" "$seed" "$s1" "$s2" $((s1 + s2)) >>"$OUT/cases.json"
         sep=,
     done
 done
 echo ']}' >>"$OUT/cases.json"
-"$PY" "$HERE/rig.py" analyze --out "$OUT"
+"$PY" "$HERE/rig.py" analyze --scale "$SCALE" --out "$OUT"
