@@ -29,11 +29,14 @@ __kernel void bvh_nodes(__global const bvh_code *codes, int n, __global int *lef
 
 /*
  * Refit from each leaf upwards: the first child to reach a node stops, the second computes the
- * node's box and goes on. The fence makes this child's box visible before the counter says so.
+ * node's box and goes on. The fence before the counter makes this child's box visible before the
+ * counter says so; the one after keeps the second child's loads of the other box from being
+ * moved before the counter told it the box is there; and those loads are volatile (bvh_node_box).
  * arrivals must be zero on entry (n - 1 ints).
  */
-__kernel void bvh_refit(__global float *box, __global const int *left, __global const int *right,
-                        __global const int *parent, int n, __global volatile int *arrivals)
+__kernel void bvh_refit(__global volatile float *box, __global const int *left,
+                        __global const int *right, __global const int *parent, int n,
+                        __global volatile int *arrivals)
 {
     int s = (int)get_global_id(0);
     if (s >= n || n < 2) return;
@@ -42,6 +45,7 @@ __kernel void bvh_refit(__global float *box, __global const int *left, __global 
         int p = parent[node];
         mem_fence(CLK_GLOBAL_MEM_FENCE);
         if (atomic_inc(&arrivals[p]) == 0) return;
+        mem_fence(CLK_GLOBAL_MEM_FENCE);
         bvh_node_box(box, left, right, p);
         node = p;
     }

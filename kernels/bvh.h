@@ -142,13 +142,18 @@ PD_FN void bvh_build_node(PD_GLOBAL const bvh_code *codes, int n, int i, PD_GLOB
     parent[b] = i;
 }
 
-/* Box of internal node i from its children's boxes (6 floats per node: lo xyz, hi xyz; leaves
- * follow the n - 1 internal nodes). min and max are exact: no rounding. */
-PD_FN void bvh_node_box(PD_GLOBAL float *box, PD_GLOBAL const int *left, PD_GLOBAL const int *right,
-                        int i)
+/*
+ * Box of internal node i from its children's boxes (6 floats per node: lo xyz, hi xyz; leaves
+ * follow the n - 1 internal nodes). min and max are exact: no rounding. volatile: in bvh_refit
+ * one child's box was written by another work-item, possibly on another compute unit, whose
+ * writes a GPU's non-coherent L1 cache may not show to a cached load (x86 and PoCL never do
+ * that; NVIDIA's and AMD's GPUs can); a volatile load goes to the coherent level.
+ */
+PD_FN void bvh_node_box(PD_GLOBAL volatile float *box, PD_GLOBAL const int *left,
+                        PD_GLOBAL const int *right, int i)
 {
-    PD_GLOBAL const float *a = box + 6 * left[i], *b = box + 6 * right[i];
-    PD_GLOBAL float *o = box + 6 * i;
+    PD_GLOBAL const volatile float *a = box + 6 * left[i], *b = box + 6 * right[i];
+    PD_GLOBAL volatile float *o = box + 6 * i;
     for (int k = 0; k < 3; k++) {
         o[k] = a[k] < b[k] ? a[k] : b[k];
         o[3 + k] = a[3 + k] > b[3 + k] ? a[3 + k] : b[3 + k];
