@@ -1,6 +1,7 @@
 #!/bin/sh
 # test_kernels_cl12.sh - every kernel program compiles as strict OpenCL C 1.2 in both precisions,
-# and those with the overlap also without its separate places (OVL_PLACES_BUILD=0, the default).
+# and those with the overlap also without its separate places (OVL_PLACES_BUILD=0, the default);
+# then each to PTX, as for an NVIDIA GPU (below).
 # NVIDIA's driver compiles OpenCL C 1.2 (its OpenCL 3.0 has no generic address space), while
 # PoCL on the test machines accepts OpenCL C 3.0: a pointer passed to the wrong address space
 # builds here and fails on a GPU. Checked with the clang that PoCL itself depends on (Debian's
@@ -34,4 +35,22 @@ for f in kernels/*.cl; do
         done
     done
 done
+# and every program compiles to PTX with LLVM's NVPTX backend (-O0: the code generator's own
+# limits, not the optimiser's): NVIDIA's driver has a compiler of its own, but a builtin, a type
+# or a construct that no GPU back end lowers shows here rather than in a GPU session's minutes
+if "$cc" --print-targets 2>/dev/null | grep -q nvptx64; then
+    for f in kernels/*.cl; do
+        for d in 0 1; do
+            name="$(basename "$f") PD_DOUBLE=$d to PTX"
+            if cl12 "$f" -DPD_DOUBLE=$d -target nvptx64-nvidia-nvcl -O0 -S -o "$tmp/k.ptx" \
+                >"$tmp/log" 2>&1 && grep -q "^.entry\|\.entry" "$tmp/k.ptx"; then
+                ok "$name"
+            else
+                bad "$name" "$(grep -m 3 error "$tmp/log")"
+            fi
+        done
+    done
+else
+    echo "skip PTX: $cc has no nvptx64 target"
+fi
 done_tests
