@@ -118,11 +118,13 @@ if [ "$CPU" = 1 ]; then
     SPHERES=5000
     BED_SETTLE=2000
     PACK=2000
+    PACK_MODE=--quick
 else
     SIZES=1000,10000,100000,1000000
     SPHERES=50000
     BED_SETTLE=20000
     PACK=1000000
+    PACK_MODE=--full
 fi
 stage devices 30 "$POLYDEM" devices
 # the kernels' first build on this driver; host and OpenCL must agree to 1e-12 (issue 2)
@@ -144,16 +146,14 @@ PY=
 for p in "$(command -v python3)" /usr/bin/python3; do # one with the study's packages
     [ -x "$p" ] && "$p" -c 'import numpy, h5py, matplotlib' 2>/dev/null && PY=$p && break
 done
-[ -n "$PY" ] || say "# no python3 with numpy, h5py and matplotlib: the packing runs without its plots"
 SO=$(mktemp -d)
 pack_t=$(($(left) - 60))
 SIG=KILL
-if [ "$CPU" = 1 ]; then
+if [ -n "$PY" ]; then # the study generates its scenario and plots with them
     stage "gravity packing, $PACK" $pack_t env PARTICLES=$PACK PYTHON="$PY" STUDIES_OUT="$SO" \
-        sh "$ROOT/studies/gravity_packing/run.sh" --quick
+        sh "$ROOT/studies/gravity_packing/run.sh" $PACK_MODE
 else
-    stage "gravity packing, $PACK" $pack_t env PARTICLES=$PACK PYTHON="$PY" STUDIES_OUT="$SO" \
-        sh "$ROOT/studies/gravity_packing/run.sh" --full
+    say "## gravity packing: skipped, no python3 with numpy, h5py and matplotlib"
 fi
 SIG=TERM
 gp=$SO/gravity_packing
