@@ -13,12 +13,13 @@ ARCH=${1:-sm_90}
 CUDA=${CUDA_HOME:-/usr/local/cuda}
 PTXAS=$(command -v ptxas || echo "$CUDA/bin/ptxas")
 LIBDEVICE=$(ls "$CUDA"/nvvm/libdevice/libdevice.*.bc 2>/dev/null | head -n 1)
-CC=$(command -v clang || ls /usr/bin/clang-[0-9]* 2>/dev/null | sort -t- -k2 -n | tail -n 1)
+cd "$ROOT"
+. tools/cl12.sh # cc, cl12
 [ -x "$PTXAS" ] || { echo "ptx_resources: no ptxas (the CUDA toolkit; CUDA_HOME=$CUDA)" >&2; exit 1; }
 [ -n "$LIBDEVICE" ] || { echo "ptx_resources: no libdevice under $CUDA/nvvm" >&2; exit 1; }
-[ -n "$CC" ] || { echo "ptx_resources: no clang (make deps)" >&2; exit 1; }
-"$CC" --print-targets 2>/dev/null | grep -q nvptx64 ||
-    { echo "ptx_resources: $CC has no nvptx64 target" >&2; exit 1; }
+[ -n "$cc" ] || { echo "ptx_resources: no clang (make deps)" >&2; exit 1; }
+"$cc" --print-targets 2>/dev/null | grep -q nvptx64 ||
+    { echo "ptx_resources: $cc has no nvptx64 target" >&2; exit 1; }
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 # the builtins the kernels call that clang leaves to an OpenCL runtime library (libclc's role);
@@ -66,23 +67,21 @@ double __attribute__((overloadable)) cos(double x) { return __nv_cos(x); }
 float __attribute__((overloadable)) sin(float x) { return __nv_sinf(x); }
 float __attribute__((overloadable)) cos(float x) { return __nv_cosf(x); }
 EOF
-"$CC" -x cl -cl-std=CL2.0 -Xclang -finclude-default-header -target nvptx64-nvidia-nvcl -O2 \
+"$cc" -x cl -cl-std=CL2.0 -Xclang -finclude-default-header -target nvptx64-nvidia-nvcl -O2 \
     -emit-llvm -c -o "$tmp/builtins.bc" "$tmp/builtins.cl"
-echo "# bench/ptx_resources.sh: $ARCH, $("$CC" --version | head -n 1), $("$PTXAS" --version | tail -n 1)"
+echo "# bench/ptx_resources.sh: $ARCH, $("$cc" --version | head -n 1), $("$PTXAS" --version | tail -n 1)"
 echo "| program | kernel | precision | registers | stack frame (bytes) | spill stores / loads (bytes) |"
 echo "|---|---|---|---|---|---|"
-for f in "$ROOT"/kernels/*.cl; do
+for f in kernels/*.cl; do
     p=$(basename "$f" .cl)
     for d in 1 0; do
         prec=double
         [ "$d" = 1 ] || prec=single
         # -march sm_80: this clang's newest; ptxas assembles its PTX for $ARCH
-        if ! "$CC" -x cl -cl-std=CL1.2 -Xclang -finclude-default-header -D__OPENCL_VERSION__=120 \
-            -Xclang -cl-ext=+cl_khr_fp64 -I"$ROOT/kernels" -DPD_DOUBLE=$d \
-            -target nvptx64-nvidia-nvcl -march=sm_80 -O2 -S \
+        if ! cl12 "$f" -DPD_DOUBLE=$d -target nvptx64-nvidia-nvcl -march=sm_80 -O2 -S \
             -Xclang -mlink-builtin-bitcode -Xclang "$tmp/builtins.bc" \
             -Xclang -mlink-builtin-bitcode -Xclang "$LIBDEVICE" \
-            -o "$tmp/$p.ptx" "$f" 2>"$tmp/log"; then
+            -o "$tmp/$p.ptx" 2>"$tmp/log"; then
             echo "| $p | (clang failed: $(grep -m 1 error "$tmp/log")) | $prec | | | |"
             continue
         fi

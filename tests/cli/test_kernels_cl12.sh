@@ -7,18 +7,12 @@
 # builds here and fails on a GPU. Checked with the clang that PoCL itself depends on (Debian's
 # libpocl2 -> clang-N), as the drivers do: __OPENCL_VERSION__ set, cl_khr_fp64 available.
 . tests/cli/lib.sh
-cc=$(command -v clang || ls /usr/bin/clang-[0-9]* 2>/dev/null | sort -t- -k2 -n | tail -n 1)
+. tools/cl12.sh
 if [ -z "$cc" ]; then
     bad "clang" "no clang found (PoCL's Debian package depends on one; run make deps)"
     done_tests
     exit 1
 fi
-cl12() { # FILE OPTIONS...: strict OpenCL C 1.2 with the drivers' defines
-    f=$1
-    shift
-    "$cc" -x cl -cl-std=CL1.2 -Xclang -finclude-default-header -D__OPENCL_VERSION__=120 \
-        -Xclang -cl-ext=+cl_khr_fp64 -Ikernels "$@" "$f"
-}
 for f in kernels/*.cl; do
     # the programs that contain the overlap (through their headers) have both builds
     builds=1
