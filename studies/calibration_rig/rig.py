@@ -221,8 +221,11 @@ def heightmap(a):
         t = h5["stats/time"][()]
         ke = h5["stats/kinetic_energy"][()]
         mass = h5["particles/mass"][()]
-    rot = study.quat_to_matrix(q)
-    pts = x[:, None, :] + size[:, None, None] * np.einsum("nij,vj->nvi", rot, verts)
+    def posed(x, q):  # every grain's mesh vertices in the world (n, v, 3)
+        return x[:, None, :] + size[:, None, None] * np.einsum(
+            "nij,vj->nvi", study.quat_to_matrix(q), verts)
+
+    pts = posed(x, q)
     under = x[:, 2] < plane_top_z(np.minimum(x[:, 0], 0)) - PLANE_T / math.cos(TILT)
     # out of the rig: below the plate or beyond its ends (nothing holds a grain there)
     out = (x[:, 2] < -0.01) | (x[:, 0] < PLATE_X[0]) | (x[:, 0] > PLATE_X[1])
@@ -242,9 +245,7 @@ def heightmap(a):
     h = bin_tops(pp, lo)
     # the same grains' map a frame earlier (a tenth of phase 2), in the same bins: how much the
     # map the angle is fitted to still changed, which the rest check bounds
-    pts_prev = x_prev[:, None, :] + size[:, None, None] * np.einsum(
-        "nij,vj->nvi", study.quat_to_matrix(q_prev), verts)
-    h_prev = bin_tops(pts_prev[pile].reshape(-1, 3), lo)
+    h_prev = bin_tops(posed(x_prev, q_prev)[pile].reshape(-1, 3), lo)
     # the flow phase's mean kinetic energy (figure 6.10's other measure): over the rows where
     # it is above 1 % of its peak
     flow = ke > 0.01 * ke.max()
