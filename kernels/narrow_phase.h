@@ -26,8 +26,10 @@ typedef struct np_body {
     int shape;
 } np_body;
 
-/* Row-major rotation matrix of a unit quaternion. */
-PD_FN void np_quat_matrix(const pd_real q[4], pd_real r[9])
+/* Row-major rotation matrix (r[9]) of a unit quaternion q[4] = [w, x, y, z]. Pointers, not array
+ * parameters: OpenCL C 2.0+ compilers (NVIDIA's by default) put array parameters in __private,
+ * and q is often a generic pointer into a struct. */
+PD_FN void np_quat_matrix(const pd_real *q, pd_real *r)
 {
     pd_real w = q[0], x = q[1], y = q[2], z = q[3];
     r[0] = 1 - 2 * (y * y + z * z);
