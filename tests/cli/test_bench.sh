@@ -1,6 +1,6 @@
 #!/bin/sh
 # test_bench.sh - bench/contacts (the pairs of a saved state through the overlap, on the host):
-# two analytic contacts read back from a result file, and bad input.
+# two analytic contacts read back from a result file, and bad input; bench/stats_rows.sh runs.
 . tests/cli/lib.sh
 CONTACTS=${POLYDEM%/polydem}/bench/contacts
 
@@ -60,4 +60,13 @@ expect_fail contacts_missing_file 1 "nope.h5: not an HDF5 file" -- "$CONTACTS" "
 expect_fail contacts_json_not_h5 1 "pairs.json: not an HDF5 file" -- "$CONTACTS" "$tmp/pairs.json"
 expect_fail contacts_frame_out_of_range 1 "frame 99 of /frames/position" -- \
     "$CONTACTS" "$tmp/pairs.h5" --frame 99
+
+# bench/stats_rows.sh on a small lattice: both runs and the cost per row are printed (a figure,
+# so no band on it), and bad use is refused
+if POLYDEM="$POLYDEM" sh bench/stats_rows.sh 300 >"$tmp/sr" 2>&1 &&
+    grep -Eq "^2 rows: +[0-9]+\.[0-9]+ s" "$tmp/sr" && grep -Eq "^101 rows: +[0-9]+\.[0-9]+ s" "$tmp/sr" &&
+    grep -Eq "^one stats row: -?[0-9]+\.[0-9]+ ms$" "$tmp/sr"; then
+    ok stats_rows
+else bad stats_rows "$(cat "$tmp/sr")"; fi
+expect_fail stats_rows_bad_count 2 "usage" -- sh bench/stats_rows.sh 12x
 done_tests
