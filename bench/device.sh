@@ -12,7 +12,8 @@
 # by default, so that a 600 s call returns with its files): the devices; one overlap on the host
 # and through OpenCL in both precisions (the kernels' first build on that driver); bench/overlap;
 # bench/step for falling Schönhardt prisms at 1e3-1e6 and 5e4 settled spheres; the dense bed;
-# then the 1e6 packing with what time is left. A stage that fails or times out is logged and the
+# depth-first against breadth-first traversal; the step in single precision; then the 1e6
+# packing with what time is left. A stage that fails or times out is logged and the
 # next one runs. Everything goes to $OUT (the device tool's folder; build/device-out otherwise):
 # device.log, and the packing's CSV and plots (at most 8 files come back).
 # --cpu: the same on this machine's first OpenCL device (PoCL), at sizes that finish in minutes.
@@ -138,6 +139,12 @@ stage "bench/step, falling" 200 "$WRAP/step" --sizes $SIZES --spheres $SPHERES -
     --steps 20
 stage "bench/step, dense bed" 150 "$WRAP/step" --sizes 1000 --spheres 0 --settle $BED_SETTLE \
     --steps 100
+# depth-first against breadth-first traversal (the thesis found breadth first 5-10x faster on its
+# GPU; on the CPU it is 2.7-4.2x slower), and single precision's step
+stage "bench/step, traversal" 120 "$WRAP/step" --sizes $SIZES --spheres $SPHERES --settle 300 \
+    --steps 5 --traversal
+stage "bench/step, single" 120 "$WRAP/step" --single --sizes $SIZES --spheres $SPHERES \
+    --settle 300 --steps 20
 # the 1e6 packing (thesis section 7.1) with what is left, less a minute for its analysis. Its
 # stats rows are flushed as they are written: a run killed (not cancelled, which removes the
 # file) leaves packing.h5.partial, whose rows give time per step against simulated time up to
@@ -160,7 +167,8 @@ gp=$SO/gravity_packing
 if [ ! -f "$gp/packing.h5" ] && [ -f "$gp/packing.h5.partial" ]; then
     # cut short: the analysis of what was written
     mv "$gp/packing.h5.partial" "$gp/packing.h5"
-    stage "packing analysis" 60 "$PY" "$ROOT/studies/gravity_packing/packing.py" analyze --out "$gp"
+    stage "packing analysis" 60 "$PY" "$ROOT/studies/gravity_packing/packing.py" analyze --out "$gp" \
+        --partial
 fi
 for f in packing.csv time_per_step.png pairs.png time_vs_pairs.png; do
     [ -f "$gp/$f" ] && cp "$gp/$f" "$OUT/"
