@@ -147,6 +147,11 @@ int pd_device_open(int index, pd_device **out, pd_error *err)
     clGetDeviceInfo(pickd, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units, NULL);
     dev->gpu = (dtype & CL_DEVICE_TYPE_GPU) != 0;
     dev->compute_units = units > 0 ? (int)units : 1;
+    cl_ulong gmem = 0, amax = 0;
+    clGetDeviceInfo(pickd, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof gmem, &gmem, NULL);
+    clGetDeviceInfo(pickd, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof amax, &amax, NULL);
+    dev->global_mem = (double)gmem;
+    dev->max_alloc = (double)amax;
     dev->queue = clCreateCommandQueue(dev->ctx, pickd, 0, &e);
     if (e != CL_SUCCESS) {
         clReleaseContext(dev->ctx);
@@ -179,6 +184,17 @@ const char *pd_device_name(const pd_device *dev)
 int pd_device_has_fp64(const pd_device *dev)
 {
     return dev->fp64;
+}
+int pd_device_is_gpu(const pd_device *dev)
+{
+    return dev->gpu;
+}
+void pd_device_capacity(const pd_device *dev, int *work_items, double *scratch_bytes)
+{
+    /* the contact stage's launch (engine/sim_state.c) */
+    *work_items = 256 * dev->compute_units;
+    double m = dev->global_mem / 4;
+    *scratch_bytes = dev->max_alloc > 0 && dev->max_alloc < m ? dev->max_alloc : m;
 }
 
 static void to_real(void *buf, const double *x, size_t n, int dbl);

@@ -23,6 +23,8 @@ struct pd_device {
     int fp64;
     int gpu;           /* a GPU (wide parallelism) rather than a CPU */
     int compute_units; /* CL_DEVICE_MAX_COMPUTE_UNITS */
+    double global_mem; /* CL_DEVICE_GLOBAL_MEM_SIZE, bytes */
+    double max_alloc;  /* CL_DEVICE_MAX_MEM_ALLOC_SIZE, bytes */
     char name[256];
 };
 

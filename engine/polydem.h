@@ -224,6 +224,13 @@ int pd_device_open(int index, pd_device **out, pd_error *err);
 void pd_device_close(pd_device *dev);
 const char *pd_device_name(const pd_device *dev);
 int pd_device_has_fp64(const pd_device *dev);
+/*
+ * What fills dev: *work_items, the work-items the engine's contact stage launches on it (256 per
+ * compute unit), and *scratch_bytes, what one buffer of per-work-item scratch may hold (a quarter
+ * of its memory, at most its largest allocation), bytes. For sizing batches (bench/overlap).
+ */
+void pd_device_capacity(const pd_device *dev, int *work_items, double *scratch_bytes);
+int pd_device_is_gpu(const pd_device *dev);
 
 /*
  * Compiles every embedded OpenCL program for dev, in single precision and, where the device has
