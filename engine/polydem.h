@@ -226,8 +226,9 @@ const char *pd_device_name(const pd_device *dev);
 int pd_device_has_fp64(const pd_device *dev);
 /*
  * What fills dev: *work_items, the work-items the engine's contact stage launches on it (256 per
- * compute unit), and *scratch_bytes, what one buffer of per-work-item scratch may hold (a quarter
- * of its memory, at most its largest allocation), bytes. For sizing batches (bench/overlap).
+ * compute unit), and *scratch_bytes, what per-work-item scratch may take of a GPU (a quarter of
+ * its memory, at most its largest allocation), bytes. A CPU device shares the host's memory, so
+ * its callers keep bounds of their own (the contact stage 128 MiB, bench/overlap 256 MiB).
  */
 void pd_device_capacity(const pd_device *dev, int *work_items, double *scratch_bytes);
 int pd_device_is_gpu(const pd_device *dev);

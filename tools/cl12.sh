@@ -4,7 +4,7 @@
 # defines cl12 FILE OPTIONS..., strict OpenCL C 1.2 with the drivers' defines (__OPENCL_VERSION__,
 # cl_khr_fp64) and the kernels' headers; and cl30 FILE OPTIONS..., OpenCL C 3.0 with the generic
 # address space and fp64, the dialect NVIDIA's driver compiles a program in when no -cl-std is
-# given (seen on an H200, driver 580). Paths are relative to the repository's root.
+# given (seen on an H200, 2026-11-30). Paths are relative to the repository's root.
 cc=$(command -v clang || ls /usr/bin/clang-[0-9]* 2>/dev/null | sort -t- -k2 -n | tail -n 1)
 cl12() {
     f=$1

@@ -2,9 +2,10 @@
 # test_kernels_cl12.sh - every kernel program compiles as strict OpenCL C 1.2 in both precisions,
 # and those with the overlap also without its separate places (OVL_PLACES_BUILD=0, the default);
 # then each as OpenCL C 3.0 with the generic address space, and to PTX, as for an NVIDIA GPU
-# (below). A GPU driver is stricter about address spaces than PoCL on the test machines: a pointer
-# passed to the wrong address space builds here and fails there. Checked with the clang that PoCL itself depends on (Debian's
-# libpocl2 -> clang-N), as the drivers do: __OPENCL_VERSION__ set, cl_khr_fp64 available.
+# (below). A GPU driver is stricter about address spaces than PoCL on the test machines: a
+# pointer passed to the wrong address space builds here and fails there. Checked with the clang
+# that PoCL itself depends on (Debian's libpocl2 -> clang-N), as the drivers do:
+# __OPENCL_VERSION__ set, cl_khr_fp64 available.
 . tests/cli/lib.sh
 . tools/cl12.sh
 if [ -z "$cc" ]; then
@@ -30,8 +31,8 @@ for f in kernels/*.cl; do
 done
 # NVIDIA's driver, given no -cl-std, compiles OpenCL C 3.0 with the generic address space, where
 # clang puts array parameters (`const pd_real q[4]`) in __private: passing a pointer into a struct
-# there is an error that OpenCL C 1.2 (everything __private) does not show. It stopped every
-# simulation kernel on the first GPU run (an H200, 2026-11-30)
+# there is an error that OpenCL C 1.2 (everything __private) does not show. It stopped the
+# contact program, and so every simulation, on the first GPU run (an H200, 2026-11-30)
 for f in kernels/*.cl; do
     for d in 0 1; do
         name="$(basename "$f") PD_DOUBLE=$d as OpenCL C 3.0"
