@@ -1,6 +1,7 @@
 #!/bin/sh
 # test_bench.sh - bench/contacts (the pairs of a saved state through the overlap, on the host):
-# two analytic contacts read back from a result file, and bad input; bench/stats_rows.sh runs.
+# two analytic contacts read back from a result file, and bad input; bench/stats_rows.sh and
+# bench/overlap run.
 . tests/cli/lib.sh
 CONTACTS=${POLYDEM%/polydem}/bench/contacts
 
@@ -69,4 +70,14 @@ if POLYDEM="$POLYDEM" sh bench/stats_rows.sh 300 >"$tmp/sr" 2>&1 &&
     ok stats_rows
 else bad stats_rows "$(cat "$tmp/sr")"; fi
 expect_fail stats_rows_bad_count 2 "usage" -- sh bench/stats_rows.sh 12x
+
+# bench/overlap on the host, one pass over its Schönhardt configurations: a row with the kept
+# triangles and a host time (figures, no bands), after its check that the configurations' copies
+# of A's vertices, which the timing shares, are equal
+OVERLAP=${POLYDEM%/polydem}/bench/overlap
+if "$OVERLAP" --quick --no-opencl --only schonhardt --reps 1 >"$tmp/ov" 2>&1 &&
+    grep -Eq '^\| schonhardt \| 8 \| [0-9.]+ \| [0-9]+ \|' "$tmp/ov"; then
+    ok overlap_bench_runs
+else bad overlap_bench_runs "$(cat "$tmp/ov")"; fi
+expect_fail overlap_bench_bad_arg 2 "usage" -- "$OVERLAP" --frobnicate
 done_tests
