@@ -111,6 +111,12 @@ static int make_configs(const pd_mesh *m, configs *cf)
     return n;
 }
 
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
 /* Host timing: ns per overlap over all configs, repeated for at least min_time seconds. */
 static long fixed_reps = 0;
 
@@ -248,14 +254,15 @@ int main(int argc, char **argv)
         "| shape | triangles | kept tris/pair (filter) | host ns, filter on | host ns, filter off "
         "| opencl ns double | opencl ns single | opencl batch |\n");
     printf("|---|---|---|---|---|---|---|---|\n");
-    /* the 80- and 1280-triangle spheres' configurations are kept for the ratio's rounds */
-    static configs cf_other, cf80, cf1280;
-    pd_mesh *m80 = NULL, *m1280 = NULL;
-    int n80 = 0, n1280 = 0;
+    /* every shape's configurations are kept to the end, for the ratio's rounds */
+    enum { NSHAPE = sizeof shapes / sizeof shapes[0] };
+    static configs cfs[NSHAPE];
+    pd_mesh *meshes[NSHAPE] = {NULL};
+    int nconf[NSHAPE] = {0}, k80 = -1, k1280 = -1;
     double t80 = 0, t1280 = 0;
-    for (size_t k = 0; k < sizeof shapes / sizeof shapes[0]; k++) {
+    for (int k = 0; k < NSHAPE; k++) {
         pd_mesh *m = NULL;
-        configs *cf = shapes[k].tris == 80 ? &cf80 : shapes[k].tris == 1280 ? &cf1280 : &cf_other;
+        configs *cf = &cfs[k];
         char label[32];
         snprintf(label, sizeof label, "%s%d", shapes[k].name, shapes[k].tris ? shapes[k].tris : 8);
         if (only && strcmp(only, shapes[k].name) && strcmp(only, label)) continue;
@@ -263,7 +270,8 @@ int main(int argc, char **argv)
             fprintf(stderr, "bench: %s\n", err.msg);
             return 1;
         }
-        int n = make_configs(m, cf);
+        meshes[k] = m;
+        int n = nconf[k] = make_configs(m, cf);
         if (n == 0) {
             fprintf(stderr, "bench: could not place %s pairs\n", shapes[k].name);
             return 1;
@@ -294,19 +302,12 @@ int main(int argc, char **argv)
         fflush(stdout);
         if (shapes[k].tris == 80) {
             t80 = on;
-            m80 = m;
-            n80 = n;
-            continue;
+            k80 = k;
         }
         if (shapes[k].tris == 1280) {
             t1280 = on;
-            m1280 = m;
-            n1280 = n;
-            continue;
+            k1280 = k;
         }
-        for (int i = 0; i < n; i++)
-            ovl_setup_free(&cf->s[i]);
-        pd_mesh_destroy(m);
     }
     if (t80 > 0 && t1280 > 0) {
         /* The two rows above were timed seconds apart, and this machine class drifts by 10 %
@@ -315,25 +316,20 @@ int main(int argc, char **argv)
         enum { ROUNDS = 5 };
         double r[ROUNDS], kept;
         for (int k = 0; k < ROUNDS; k++) {
-            double a = time_host(&cf80, n80, 0, min_time / 2, &kept);
-            double b = time_host(&cf1280, n1280, 0, min_time / 2, &kept);
+            double a = time_host(&cfs[k80], nconf[k80], 0, min_time / 2, &kept);
+            double b = time_host(&cfs[k1280], nconf[k1280], 0, min_time / 2, &kept);
             r[k] = b / a;
-            for (int j = k; j > 0 && r[j] < r[j - 1]; j--) { /* insertion: sorted so far */
-                double x = r[j];
-                r[j] = r[j - 1];
-                r[j - 1] = x;
-            }
         }
+        qsort(r, ROUNDS, sizeof *r, cmp_double);
         printf("\nicosphere 1280 / 80 host time ratio (filter on): %.2f; median of %d rounds "
                "timing both back to back: %.2f (%.2f-%.2f)\n",
                t1280 / t80, ROUNDS, r[ROUNDS / 2], r[0], r[ROUNDS - 1]);
     }
-    for (int i = 0; i < n80; i++)
-        ovl_setup_free(&cf80.s[i]);
-    for (int i = 0; i < n1280; i++)
-        ovl_setup_free(&cf1280.s[i]);
-    pd_mesh_destroy(m80);
-    pd_mesh_destroy(m1280);
+    for (int k = 0; k < NSHAPE; k++) {
+        for (int i = 0; i < nconf[k]; i++)
+            ovl_setup_free(&cfs[k].s[i]);
+        pd_mesh_destroy(meshes[k]);
+    }
     pd_device_close(dev);
     return 0;
 }
