@@ -80,4 +80,15 @@ if "$OVERLAP" --quick --no-opencl --only schonhardt --reps 1 >"$tmp/ov" 2>&1 &&
     ok overlap_bench_runs
 else bad overlap_bench_runs "$(cat "$tmp/ov")"; fi
 expect_fail overlap_bench_bad_arg 2 "usage" -- "$OVERLAP" --frobnicate
+# the 1280 / 80 ratio from the rows and from five back-to-back rounds: the median lies in the
+# range printed with it, and a 1280-triangle pair costs more than an 80-triangle one (~4.5x)
+if "$OVERLAP" --quick --no-opencl --no-filter-off --reps 1 >"$tmp/ov" 2>&1 &&
+    awk '/^icosphere 1280 \/ 80 host time ratio/ {
+        n = split($0, w, /[^0-9.]+/); k = 0
+        for (i = 1; i <= n; i++) if (w[i] != "") v[++k] = w[i] + 0
+        # 1280 80 rows-ratio 5 median lo hi
+        found = k == 7 && v[3] > 1 && v[4] == 5 && v[6] > 1 && v[6] <= v[5] && v[5] <= v[7] }
+        END { exit found ? 0 : 1 }' "$tmp/ov"; then
+    ok overlap_bench_ratio_rounds
+else bad overlap_bench_ratio_rounds "$(tail -n 2 "$tmp/ov")"; fi
 done_tests
