@@ -3,8 +3,9 @@
 # gravity packing's falling lattice (studies/gravity_packing, 1e5 particles by default) runs
 # 1000 steps twice: with a row every 10 steps (101 rows) and with rows at its start and end only
 # (2), each twice, the faster of the two kept (the first run also builds the kernels). The
-# difference per row is the row's cost: the state and pair reads from the device and the host's
-# kinetic energy, contact count and wall force sums. Prints the runs' times and the cost per row
+# difference per row is the row's cost: the kinetic energy, contact count and wall force sums on
+# the device (kernels/stats.cl; until 2026-12-01 the state and pairs were read back and summed on
+# the host), and the step it times stage by stage. Prints the runs' times and the cost per row
 # (ms); a scenario whose stats_interval is k steps pays cost/k per step on top of its steps.
 # POLYDEM and PYTHON (with numpy) name the programs; build/polydem and /usr/bin/python3 otherwise.
 set -eu

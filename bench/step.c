@@ -112,6 +112,54 @@ static long count_contacts(sim *m)
     return c;
 }
 
+/*
+ * What a stats row costs on this state: its sums on the device (sim_stats.c: kinetic energy,
+ * contacts, wall forces), against reading back the state and pairs they are sums of, which rows
+ * did until 2026-12-01 (before their host loops). The fastest of 5 rounds of 10 rows each.
+ */
+static void stats_row_time(sim *m)
+{
+    size_t n = (size_t)m->n, np = (size_t)m->npairs;
+    double *buf = malloc(sizeof(double) * (10 * n + 4 * np + 4)),
+           *wf = calloc(3 * (size_t)m->nwall + 3, sizeof(double));
+    pd_error err = {0};
+    double dev_t = 1e30, read_t = 1e30, ke = 0, ratio = 0;
+    long contacts = 0;
+    int worst, rc = buf && wf ? PD_OK : PD_ENOMEM;
+    for (int round = 0; round < 5 && rc == PD_OK; round++) {
+        clFinish(m->dev->queue);
+        double t0 = now();
+        for (int r = 0; r < 10 && rc == PD_OK; r++) {
+            rc = sim_stats_energy(m, &ke, &worst, &err);
+            if (rc == PD_OK) rc = sim_stats_contacts(m, &contacts, &ratio, wf, &err);
+        }
+        double t1 = now();
+        for (int r = 0; r < 10 && rc == PD_OK; r++) {
+            rc = sim_read(m, m->q, 0, 4 * n, buf, &err);
+            if (rc == PD_OK) rc = sim_read(m, m->v, 0, 3 * n, buf + 4 * n, &err);
+            if (rc == PD_OK) rc = sim_read(m, m->L, 0, 3 * n, buf + 7 * n, &err);
+            if (rc == PD_OK && np) rc = sim_read(m, m->force, 0, 3 * np, buf + 10 * n, &err);
+            if (rc == PD_OK && np) rc = sim_read_info(m, np, buf + 10 * n + 3 * np, &err);
+            if (rc == PD_OK && np &&
+                clEnqueueReadBuffer(m->dev->queue, m->pairs.keys, CL_TRUE, 0, 8 * np, buf, 0, NULL,
+                                    NULL) != CL_SUCCESS)
+                rc = PD_ECL;
+        }
+        double t2 = now();
+        dev_t = t1 - t0 < dev_t ? t1 - t0 : dev_t;
+        read_t = t2 - t1 < read_t ? t2 - t1 : read_t;
+    }
+    if (rc == PD_OK)
+        printf(
+            "  a stats row: %.3g ms summed on the device (%.6g J, %ld contacts); reading back the "
+            "state and pairs they sum: %.3g ms\n",
+            100 * dev_t, ke, contacts, 100 * read_t);
+    else
+        fprintf(stderr, "bench: stats row: %s\n", err.msg[0] ? err.msg : "failed");
+    free(buf);
+    free(wf);
+}
+
 static cl_mem grow(pd_device *dev, cl_mem b, size_t *cap, size_t need, cl_int *e)
 {
     if (need <= *cap && b) return b;
@@ -308,6 +356,7 @@ static int bench_case(pd_device *dev, long n, int spheres, int dbl, int settle, 
            "gap search waiting); %.0f bytes per particle besides the %.2f MB of overlap scratch\n",
            built, steps, m->skin, (double)m->npairs / n, certified, waiting,
            (m->bytes - scratch) / n, scratch / 1048576);
+    stats_row_time(m);
     if (getenv("BENCH_DUMP")) { /* positions, for comparing runs */
         double *x = malloc(sizeof(double) * 3 * (size_t)n);
         if (x && sim_read(m, m->x, 0, 3 * (size_t)n, x, &err) == PD_OK) {

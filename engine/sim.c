@@ -8,8 +8,7 @@
 #include <time.h>
 
 #define PD_DOUBLE 1
-#include "contact_history.h" /* CH_WALL: walls as second bodies of pair keys */
-#include "integrate.h"       /* rotational energy and omega on the host, as the kernels do */
+#include "integrate.h" /* rotational energy and omega on the host, as the kernels do */
 #include "result_h5.h"
 #include "sim.h"
 
@@ -20,11 +19,9 @@ static double now_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Host copies of what stats rows and frames need. */
+/* Host copies of what frames need (stats rows are summed on the device: sim_stats.c). */
 typedef struct run_host {
-    double *x, *q, *v, *L, *w, *force, *info;
-    cl_ulong *keys;
-    size_t pair_cap;
+    double *x, *q, *v, *L, *w;
     double *wall_force;
 } run_host;
 
@@ -48,82 +45,23 @@ static void host_free(run_host *h)
     free(h->v);
     free(h->L);
     free(h->w);
-    free(h->force);
-    free(h->info);
-    free(h->keys);
     free(h->wall_force);
 }
 
-/* Reads orientations, velocities and angular momenta (what the kinetic energy needs), and for a
- * frame (frame set) positions too, with omega from L on the host. A stats row on a large run
- * costs mostly these reads and loops (bench/stats_rows.sh: 32 ms for 1e6 particles on an H200,
- * 139 ms when every row also read positions and computed omega through a copy), so a row
- * without a frame skips what only frames use. */
-static int read_state(sim *m, run_host *h, int frame, pd_error *err)
+/* Reads a frame's state, with omega from L on the host. */
+static int read_frame(sim *m, run_host *h, pd_error *err)
 {
     size_t n = (size_t)m->n;
     int rc = sim_read(m, m->q, 0, 4 * n, h->q, err);
     if (rc == PD_OK) rc = sim_read(m, m->v, 0, 3 * n, h->v, err);
     if (rc == PD_OK) rc = sim_read(m, m->L, 0, 3 * n, h->L, err);
-    if (rc == PD_OK && frame) rc = sim_read(m, m->x, 0, 3 * n, h->x, err);
-    if (rc != PD_OK || !frame) return rc;
+    if (rc == PD_OK) rc = sim_read(m, m->x, 0, 3 * n, h->x, err);
+    if (rc != PD_OK) return rc;
     for (size_t i = 0; i < n; i++) {
         const double *in = m->p->inertia + 3 * i;
         pd_q4 q = q4(h->q[4 * i], h->q[4 * i + 1], h->q[4 * i + 2], h->q[4 * i + 3]);
         pd_v3 wb = int_omega_body(q, v3_load(h->L, (int)i), v3(1 / in[0], 1 / in[1], 1 / in[2]));
         v3_store(h->w, (int)i, q4_rotate(q, wb));
-    }
-    return PD_OK;
-}
-
-static double kinetic_energy(const sim *m, const run_host *h, int *max_particle)
-{
-    double ke = 0, best = -1;
-    for (int i = 0; i < m->n; i++) {
-        const double *v = h->v + 3 * i, *in = m->p->inertia + 3 * i;
-        pd_q4 q = q4(h->q[4 * i], h->q[4 * i + 1], h->q[4 * i + 2], h->q[4 * i + 3]);
-        double e = 0.5 * m->p->mass[i] * (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) +
-                   int_rot_energy(q, v3_load(h->L, i), v3(1 / in[0], 1 / in[1], 1 / in[2]));
-        ke += e;
-        if (!(e <= best)) { /* NaN wins, so it is the one named */
-            best = e;
-            *max_particle = i;
-        }
-    }
-    return ke;
-}
-
-/* Contacts, largest overlap ratio and wall forces from the last step's pairs. */
-static int contact_stats(sim *m, run_host *h, long *contacts, double *max_ratio, pd_error *err)
-{
-    size_t np = (size_t)m->npairs;
-    if (np > h->pair_cap) {
-        free(h->keys);
-        free(h->force);
-        free(h->info);
-        h->keys = malloc(sizeof(cl_ulong) * np);
-        h->force = malloc(sizeof(double) * 3 * np);
-        h->info = malloc(sizeof(double) * np);
-        h->pair_cap = h->keys && h->force && h->info ? np : 0;
-        if (!h->pair_cap) return pd_error_set(err, PD_ENOMEM, "run: out of memory for stats");
-    }
-    *contacts = 0;
-    *max_ratio = 0;
-    memset(h->wall_force, 0, sizeof(double) * 3 * (size_t)(m->nwall + 1));
-    if (np == 0) return PD_OK;
-    cl_int e = clEnqueueReadBuffer(m->dev->queue, m->pairs.keys, CL_TRUE, 0, sizeof(cl_ulong) * np,
-                                   h->keys, 0, NULL, NULL);
-    if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueReadBuffer(keys)", e);
-    int rc = sim_read(m, m->force, 0, 3 * np, h->force, err);
-    if (rc == PD_OK) rc = sim_read_info(m, np, h->info, err);
-    if (rc != PD_OK) return rc;
-    for (size_t c = 0; c < np; c++) {
-        if (h->info[c] >= 0) (*contacts)++; /* depth / size when touching, -1 when not */
-        if (h->info[c] > *max_ratio) *max_ratio = h->info[c];
-        unsigned second = (unsigned)(h->keys[c] & 0xffffffffu);
-        if (second >= CH_WALL) /* the force on the wall, summed in key order */
-            for (int k = 0; k < 3; k++)
-                h->wall_force[3 * (second - CH_WALL) + k] += h->force[3 * c + k];
     }
     return PD_OK;
 }
@@ -251,9 +189,9 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
         int frame_due = step % frame_every == 0 || step == steps;
         double t = (double)step * s->dt;
         if (stats_due || frame_due) {
-            if ((rc = read_state(m, &h, frame_due, err)) != PD_OK) goto done;
             int worst = 0;
-            double ke = kinetic_energy(m, &h, &worst);
+            double ke;
+            if ((rc = sim_stats_energy(m, &ke, &worst, err)) != PD_OK) goto done;
             if (step == 0) ebound = energy_bound(m, ke);
             if (!isfinite(ke) || ke > ebound) {
                 rc = pd_error_set(err, PD_EDIVERGED,
@@ -272,7 +210,8 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
         if (stats_due) {
             long contacts;
             double ratio;
-            if ((rc = contact_stats(m, &h, &contacts, &ratio, err)) != PD_OK) goto done;
+            rc = sim_stats_contacts(m, &contacts, &ratio, h.wall_force, err);
+            if (rc != PD_OK) goto done;
             pr.contacts = contacts;
             pr.broad_pairs = m->npairs;
             rc = rh5_write_stats(w, t, step, pr.kinetic_energy, contacts, m->npairs, ratio,
@@ -281,6 +220,7 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
             if (rc != PD_OK) goto done;
         }
         if (frame_due) {
+            if ((rc = read_frame(m, &h, err)) != PD_OK) goto done;
             rc = rh5_write_frame(w, t, step, h.x, h.q, h.v, h.w, err);
             if (rc != PD_OK) goto done;
             pr.frames++;

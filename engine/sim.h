@@ -111,7 +111,12 @@ typedef struct sim {
     int ilen, rlen, pts_cap, nwork;
     /* kernels */
     cl_kernel k_codes, k_leaves, k_nodes, k_refit, k_count, k_write, k_contact, k_hist_count,
-        k_hist_keep, k_second_count, k_second_fill, k_body, k_kick, k_drift;
+        k_hist_keep, k_second_count, k_second_fill, k_body, k_kick, k_drift, k_stats_energy,
+        k_stats_contacts;
+    /* a stats row's partial sums (kernels/stats.cl, sim_stats.c): up to stat_parts work-items,
+     * each summing every stat_parts-th particle or pair */
+    int stat_parts;
+    cl_mem st_sum, st_emax, st_imax, st_count, st_ratio, st_wall;
     dsort sort;
     /* profiling (bench/step, and pd_run for the steps that end at stats rows): when set, every
      * stage ends with clFinish and its wall time is added to stage_seconds[SIM_*] */
@@ -136,6 +141,15 @@ int sim_read_info(sim *m, size_t cnt, double *out, pd_error *err);
 cl_int sim_zero_reals(sim *m, cl_mem b, size_t cnt);
 /* Sets the walls' poses, velocities and boxes for time t (when they move). */
 int sim_walls_at(sim *m, double t, pd_error *err);
+
+/* sim_stats.c: a stats row, summed on the device (kernels/stats.cl) */
+/* The particles' kinetic energy, J (translational + rotational), and the particle with the most
+ * (one whose state is not finite, if any). */
+int sim_stats_energy(sim *m, double *ke, int *worst, pd_error *err);
+/* The last step's touching pairs, largest depth / size, and the force on each wall, N
+ * (wall_force: 3 per wall). */
+int sim_stats_contacts(sim *m, long *contacts, double *max_ratio, double *wall_force,
+                       pd_error *err);
 
 /* sim_step.c: the stages */
 int sim_forces(sim *m, pd_error *err);

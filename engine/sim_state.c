@@ -564,14 +564,17 @@ static const char *const kernel_names[][2] = {
     {"forces", "body_forces"},
     {"integrate", "integrate_kick"},
     {"integrate", "integrate_drift"},
+    {"stats", "stats_energy"},
+    {"stats", "stats_contacts"},
 };
 
 static cl_kernel *kernel_slot(sim *m, int i)
 {
-    cl_kernel *slots[] = {&m->k_codes,     &m->k_leaves,       &m->k_nodes,       &m->k_refit,
-                          &m->k_count,     &m->k_write,        &m->k_contact,     &m->k_hist_count,
-                          &m->k_hist_keep, &m->k_second_count, &m->k_second_fill, &m->k_body,
-                          &m->k_kick,      &m->k_drift};
+    cl_kernel *slots[] = {
+        &m->k_codes,     &m->k_leaves,       &m->k_nodes,        &m->k_refit,
+        &m->k_count,     &m->k_write,        &m->k_contact,      &m->k_hist_count,
+        &m->k_hist_keep, &m->k_second_count, &m->k_second_fill,  &m->k_body,
+        &m->k_kick,      &m->k_drift,        &m->k_stats_energy, &m->k_stats_contacts};
     return slots[i];
 }
 
@@ -667,6 +670,18 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->travel = mk(m, rs * n, &ok, &e);
     m->second_count = mk(m, sizeof(int) * n, &ok, &e);
     m->second_off = mk(m, sizeof(int) * (n + 1), &ok, &e);
+    /* stats rows: a few work-items per compute unit, fewer where the walls' partial sums (six
+     * reals per wall and work-item) would pass 16 MiB */
+    long parts = 64L * (dev->compute_units > 0 ? dev->compute_units : 1);
+    long wall_parts = 16L * 1048576 / (long)(6 * rs * (W > 0 ? W : 1));
+    if (parts > wall_parts) parts = wall_parts > 1 ? wall_parts : 1;
+    m->stat_parts = (int)parts;
+    m->st_sum = mk(m, rs * (size_t)parts, &ok, &e);
+    m->st_emax = mk(m, rs * (size_t)parts, &ok, &e);
+    m->st_imax = mk(m, sizeof(int) * (size_t)parts, &ok, &e);
+    m->st_count = mk(m, sizeof(int) * (size_t)parts, &ok, &e);
+    m->st_ratio = mk(m, sizeof(float) * (size_t)parts, &ok, &e);
+    m->st_wall = mk(m, rs * 6 * W * (size_t)parts, &ok, &e);
     if (!ok) {
         rc = CL_FAIL(err, "clCreateBuffer(particles)", e);
         goto fail;
@@ -781,6 +796,13 @@ void sim_destroy(sim *m)
                       &m->second_list,
                       &m->second_count,
                       &m->second_off,
+                      &m->cand,
+                      &m->st_sum,
+                      &m->st_emax,
+                      &m->st_imax,
+                      &m->st_count,
+                      &m->st_ratio,
+                      &m->st_wall,
                       &m->iscr,
                       &m->rscr};
     for (size_t i = 0; i < sizeof bufs / sizeof bufs[0]; i++)

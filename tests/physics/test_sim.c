@@ -7,6 +7,9 @@
 #include <string.h>
 #include <unistd.h>
 
+#define PD_DOUBLE 1
+#include "contact_history.h" /* CH_WALL */
+#include "integrate.h"       /* the kinetic energy, as rows summed it on the host */
 #include "sim.h"
 #include "grid_box.h"
 #include "test.h"
@@ -563,6 +566,108 @@ static int run_bed(const char *precision, int nsteps, double *x, double *q, long
     }
     finish(&r);
     return 0;
+}
+
+/*
+ * A stats row is summed on the device (kernels/stats.cl, engine/sim_stats.c): it must give what
+ * summing the state read back gives, as rows were computed before. The bed with a second wall
+ * (a strip of floor under part of the bed, so both walls carry force), after 2 000 steps (4 ms:
+ * particles on the floor and on each other). Kinetic energy within 1e-12 relative in double
+ * precision (the device's 1 / inv_m and inverse inertia against the host's mass and inertia,
+ * and a different order of summation: a few ulps per term) and 1e-5 in single (the device sums
+ * float energies, Kahan-compensated; the host, the same floats in double: ~1e-7 per term); the
+ * contacts and the largest depth / size exactly (integer counts, a maximum of the same floats);
+ * the wall forces within the same relative bounds of the summed magnitudes. A particle whose
+ * velocity is NaN makes the energy not finite and is the one named.
+ */
+static void check_stats_rows(const char *precision, double tol)
+{
+    char json[3200];
+    snprintf(json, sizeof json, bed_json, precision, "merged",
+             ", {\"name\": \"strip\", \"material\": \"m\", \"box\": {\"min\": [-0.5, -1, -0.05], "
+             "\"max\": [0.04, 1, -0.002]}}");
+    run r;
+    if (start(&r, json)) return;
+    for (int i = 0; i < 2000; i++)
+        if (step(&r)) break;
+    sim *m = r.m;
+    pd_error err = {0};
+    int n = m->n, np = m->npairs;
+    double ke_dev, ratio_dev, wf_dev[6];
+    int worst_dev;
+    long contacts_dev;
+    CHECK_EQ_INT(PD_OK, sim_stats_energy(m, &ke_dev, &worst_dev, &err));
+    CHECK_EQ_INT(PD_OK, sim_stats_contacts(m, &contacts_dev, &ratio_dev, wf_dev, &err));
+
+    double q[4 * 40], v[3 * 40], L[3 * 40], e_host[40], ke = 0;
+    get(&r, m->q, 4 * (size_t)n, q);
+    get(&r, m->v, 3 * (size_t)n, v);
+    get(&r, m->L, 3 * (size_t)n, L);
+    for (int i = 0; i < n; i++) {
+        const double *in = m->p->inertia + 3 * i, *vi = v + 3 * i;
+        pd_q4 qi = q4(q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]);
+        e_host[i] = 0.5 * m->p->mass[i] * (vi[0] * vi[0] + vi[1] * vi[1] + vi[2] * vi[2]) +
+                    int_rot_energy(qi, v3_load(L, i), v3(1 / in[0], 1 / in[1], 1 / in[2]));
+        ke += e_host[i];
+    }
+    double emax = 0;
+    for (int i = 0; i < n; i++)
+        emax = fmax(emax, e_host[i]);
+    CHECK_REL(ke, ke_dev, tol);
+    CHECK(worst_dev >= 0 && worst_dev < n);
+    if (worst_dev >= 0 && worst_dev < n) CHECK_REL(emax, e_host[worst_dev], tol);
+
+    double *info = malloc(sizeof(double) * (size_t)np), *f = malloc(sizeof(double) * 3 * np);
+    cl_ulong *keys = malloc(sizeof(cl_ulong) * (size_t)np);
+    if (!info || !f || !keys || np < 1) {
+        TEST_FAILF("%d pairs", np);
+        goto done;
+    }
+    get_info(&r, (size_t)np, info);
+    get(&r, m->force, 3 * (size_t)np, f);
+    clEnqueueReadBuffer(dev->queue, m->pairs.keys, CL_TRUE, 0, sizeof(cl_ulong) * np, keys, 0, NULL,
+                        NULL);
+    long contacts = 0;
+    double ratio = 0, wf[6] = {0}, mag[2] = {0};
+    for (int c = 0; c < np; c++) {
+        contacts += info[c] >= 0;
+        ratio = fmax(ratio, info[c]);
+        unsigned b = (unsigned)(keys[c] & 0xffffffffu);
+        if (b < CH_WALL) continue;
+        for (int k = 0; k < 3; k++) {
+            wf[3 * (b - CH_WALL) + k] += f[3 * c + k];
+            mag[b - CH_WALL] += fabs(f[3 * c + k]);
+        }
+    }
+    printf("  %s: %ld contacts, kinetic energy %.6g J (device) / %.6g J (host), wall forces "
+           "z %.6g / %.6g N (floor), %.6g / %.6g N (strip)\n",
+           precision, contacts, ke_dev, ke, wf_dev[2], wf[2], wf_dev[5], wf[5]);
+    CHECK(contacts > 0);
+    CHECK(contacts_dev == contacts);
+    CHECK(ratio_dev == ratio);
+    for (int w = 0; w < 2; w++) {
+        CHECK(mag[w] > 0); /* both walls carry force */
+        for (int k = 0; k < 3; k++)
+            CHECK_NEAR(wf[3 * w + k], wf_dev[3 * w + k], tol * mag[w]);
+    }
+
+    /* a particle gone NaN: not finite, and named */
+    double nan3[3] = {NAN, 0, 0};
+    CHECK_EQ_INT(PD_OK, sim_write(m, m->v, 3 * 17, 3, nan3, &err));
+    CHECK_EQ_INT(PD_OK, sim_stats_energy(m, &ke_dev, &worst_dev, &err));
+    CHECK(!isfinite(ke_dev));
+    CHECK_EQ_INT(17, worst_dev);
+done:
+    free(info);
+    free(f);
+    free(keys);
+    finish(&r);
+}
+
+TEST(stats_rows_match_host_sums)
+{
+    if (pd_device_has_fp64(dev)) check_stats_rows("double", 1e-12);
+    check_stats_rows("single", 1e-5);
 }
 
 /* Issue 3: the same scenario on the same device gives bit-identical states, contacts included
@@ -1288,6 +1393,7 @@ int main(void)
     RUN(single_precision_finds_a_contact_in_far_places);
     RUN(single_precision_flat_face_on_a_meshed_floor);
     RUN(divergence_is_reported);
+    RUN(stats_rows_match_host_sums);
     pd_device_close(dev);
     return TEST_DONE();
 }
