@@ -28,6 +28,12 @@ static int shares(const sim *m, long cnt)
     return cnt < m->stat_parts ? (int)cnt : m->stat_parts;
 }
 
+/* A share's contiguous run of items on a CPU (kernels/stats.cl, st_item); 0 on a GPU. */
+static int span(const sim *m, long cnt, int parts)
+{
+    return m->dev->gpu ? 0 : (int)((cnt + parts - 1) / parts);
+}
+
 int sim_stats_energy(sim *m, double *ke, int *worst, pd_error *err)
 {
     *ke = 0;
@@ -44,10 +50,12 @@ int sim_stats_energy(sim *m, double *ke, int *worst, pd_error *err)
     e |= ARG(k, 7, m->unit_inertia);
     e |= ARG(k, 8, m->density);
     e |= ARG(k, 9, m->n);
+    int sp = span(m, m->n, parts);
     e |= ARG(k, 10, parts);
-    e |= ARG(k, 11, m->st_sum);
-    e |= ARG(k, 12, m->st_emax);
-    e |= ARG(k, 13, m->st_imax);
+    e |= ARG(k, 11, sp);
+    e |= ARG(k, 12, m->st_sum);
+    e |= ARG(k, 13, m->st_emax);
+    e |= ARG(k, 14, m->st_imax);
     if (e != CL_SUCCESS)
         return pd_error_set(err, PD_ECL, "opencl: setting the arguments of stats_energy failed");
     int rc = cl_launch(m->dev, k, (size_t)parts, "stats_energy", err);
@@ -92,10 +100,12 @@ int sim_stats_contacts(sim *m, long *contacts, double *max_ratio, double *wall_f
     e |= ARG(k, 2, m->force);
     e |= ARG(k, 3, m->npairs);
     e |= ARG(k, 4, m->nwall);
+    int sp = span(m, m->npairs, parts);
     e |= ARG(k, 5, parts);
-    e |= ARG(k, 6, m->st_count);
-    e |= ARG(k, 7, m->st_ratio);
-    e |= ARG(k, 8, m->st_wall);
+    e |= ARG(k, 6, sp);
+    e |= ARG(k, 7, m->st_count);
+    e |= ARG(k, 8, m->st_ratio);
+    e |= ARG(k, 9, m->st_wall);
     if (e != CL_SUCCESS)
         return pd_error_set(err, PD_ECL, "opencl: setting the arguments of stats_contacts failed");
     int rc = cl_launch(m->dev, k, (size_t)parts, "stats_contacts", err);

@@ -643,20 +643,36 @@ static void check_stats_rows(const char *precision, double tol)
            "z %.6g / %.6g N (floor), %.6g / %.6g N (strip)\n",
            precision, contacts, ke_dev, ke, wf_dev[2], wf[2], wf_dev[5], wf[5]);
     CHECK(contacts > 0);
-    CHECK(contacts_dev == contacts);
-    CHECK(ratio_dev == ratio);
-    for (int w = 0; w < 2; w++) {
-        CHECK(mag[w] > 0); /* both walls carry force */
-        for (int k = 0; k < 3; k++)
-            CHECK_NEAR(wf[3 * w + k], wf_dev[3 * w + k], tol * mag[w]);
+    for (int layout = 0; layout < 2; layout++) {
+        CHECK(contacts_dev == contacts);
+        CHECK(ratio_dev == ratio);
+        for (int w = 0; w < 2; w++) {
+            CHECK(mag[w] > 0); /* both walls carry force */
+            for (int k = 0; k < 3; k++)
+                CHECK_NEAR(wf[3 * w + k], wf_dev[3 * w + k], tol * mag[w]);
+        }
+        if (layout) break;
+        /* the other device class's shares (contiguous on a CPU, interleaved on a GPU), three of
+         * them, so that each sums many items (the last fewer) */
+        m->dev->gpu = !m->dev->gpu;
+        m->stat_parts = 3;
+        CHECK_EQ_INT(PD_OK, sim_stats_energy(m, &ke_dev, &worst_dev, &err));
+        CHECK_EQ_INT(PD_OK, sim_stats_contacts(m, &contacts_dev, &ratio_dev, wf_dev, &err));
+        m->dev->gpu = !m->dev->gpu;
+        CHECK_REL(ke, ke_dev, tol);
+        if (worst_dev >= 0 && worst_dev < n) CHECK_REL(emax, e_host[worst_dev], tol);
     }
 
-    /* a particle gone NaN: not finite, and named */
+    /* a particle gone NaN: not finite, and named, in shares of one particle and of many (with
+     * larger energies after it in its share: it stays the one named) */
     double nan3[3] = {NAN, 0, 0};
     CHECK_EQ_INT(PD_OK, sim_write(m, m->v, 3 * 17, 3, nan3, &err));
-    CHECK_EQ_INT(PD_OK, sim_stats_energy(m, &ke_dev, &worst_dev, &err));
-    CHECK(!isfinite(ke_dev));
-    CHECK_EQ_INT(17, worst_dev);
+    for (int parts = 40; parts >= 3; parts -= 37) {
+        m->stat_parts = parts;
+        CHECK_EQ_INT(PD_OK, sim_stats_energy(m, &ke_dev, &worst_dev, &err));
+        CHECK(!isfinite(ke_dev));
+        CHECK_EQ_INT(17, worst_dev);
+    }
 done:
     free(info);
     free(f);
