@@ -60,7 +60,7 @@ typedef struct sim {
     double margin;            /* added to every box: half the largest cohesion range, m */
     double lo[3], inv_ext[3]; /* Morton scene box */
 
-    /* bodies */
+    /* bodies (w: the walls' angular velocities only, from index 0) */
     cl_mem x, q, v, w, size, inv_m, shape, material;
     /* particles */
     cl_mem L, f, t;

@@ -171,7 +171,7 @@ int sim_walls_at(sim *m, double t, pd_error *err)
     rc = sim_write(m, m->x, 3 * b0, 3 * (size_t)W, x, err);
     if (rc == PD_OK) rc = sim_write(m, m->q, 4 * b0, 4 * (size_t)W, q, err);
     if (rc == PD_OK) rc = sim_write(m, m->v, 3 * b0, 3 * (size_t)W, v, err);
-    if (rc == PD_OK) rc = sim_write(m, m->w, 3 * b0, 3 * (size_t)W, w, err);
+    if (rc == PD_OK) rc = sim_write(m, m->w, 0, 3 * (size_t)W, w, err); /* walls' only */
     if (rc == PD_OK) rc = write_boxes(m, m->wbox, W, box, err);
 done:
     free(x);
@@ -516,7 +516,6 @@ static int upload_bodies(sim *m, pd_error *err)
     rc = sim_write(m, m->x, 0, 3 * (size_t)n, p->x, err);
     if (rc == PD_OK) rc = sim_write(m, m->q, 0, 4 * (size_t)n, p->q, err);
     if (rc == PD_OK) rc = sim_write(m, m->v, 0, 3 * (size_t)n, p->v, err);
-    if (rc == PD_OK) rc = sim_write(m, m->w, 0, 3 * (size_t)n, p->w, err);
     if (rc == PD_OK) rc = sim_write(m, m->L, 0, 3 * (size_t)n, L, err);
     if (rc == PD_OK) rc = sim_write(m, m->inv_m, 0, (size_t)B, inv_m, err);
     if (rc == PD_OK) rc = sim_write(m, m->size, 0, (size_t)B, size, err);
@@ -638,13 +637,17 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->x = mk(m, rs * 3 * B, &ok, &e);
     m->q = mk(m, rs * 4 * B, &ok, &e);
     m->v = mk(m, rs * 3 * B, &ok, &e);
-    m->w = mk(m, rs * 3 * B, &ok, &e);
+    /* angular velocities of the walls only: a particle's follows from its L and q (cp_omega) */
+    m->w = mk(m, rs * 3 * W, &ok, &e);
     m->size = mk(m, rs * B, &ok, &e);
     m->inv_m = mk(m, rs * B, &ok, &e);
     m->shape = mk(m, sizeof(int) * B, &ok, &e);
     m->material = mk(m, sizeof(int) * B, &ok, &e);
     m->L = mk(m, rs * 3 * n, &ok, &e);
-    m->f = mk(m, rs * 3 * n, &ok, &e);
+    /* f holds the traversal's candidates too (m->cand below): BVH_CAND ints a particle, more
+     * than its 3 reals in single precision */
+    size_t f_per = rs * 3 > sizeof(int) * BVH_CAND ? rs * 3 : sizeof(int) * BVH_CAND;
+    m->f = mk(m, f_per * n, &ok, &e);
     m->t = mk(m, rs * 3 * n, &ok, &e);
     m->wbox = mk(m, sizeof(float) * 6 * W, &ok, &e);
     m->tbox = mk(m, sizeof(float) * 6 * (2 * n - 1), &ok, &e); /* boxes are floats (bvh.h) */
@@ -652,9 +655,7 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
     m->right = mk(m, sizeof(int) * n, &ok, &e);
     m->parent = mk(m, sizeof(int) * 2 * n, &ok, &e);
     m->codes = mk(m, sizeof(cl_ulong) * n, &ok, &e);
-    m->codes_tmp = mk(m, sizeof(cl_ulong) * n, &ok, &e);
     m->idx = mk(m, sizeof(int) * n, &ok, &e);
-    m->idx_tmp = mk(m, sizeof(int) * n, &ok, &e);
     m->count = mk(m, sizeof(int) * n, &ok, &e);
     /* the refit's arrival counters share count's memory: count is free from keep_history's end
      * until broad_count, which runs after the refit (one in-order queue) */
@@ -664,12 +665,26 @@ int sim_create(pd_device *dev, const pd_scenario *s, sim **out, pd_error *err)
         ok = 0;
     m->offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
     m->carry_offset = mk(m, sizeof(int) * (n + 1), &ok, &e);
-    m->cand = mk(m, sizeof(int) * BVH_CAND * n, &ok, &e);
     m->status = mk(m, sizeof(int) * 3, &ok, &e);
     m->x_ref = mk(m, rs * 3 * n, &ok, &e);
     m->travel = mk(m, rs * n, &ok, &e);
     m->second_count = mk(m, sizeof(int) * n, &ok, &e);
     m->second_off = mk(m, sizeof(int) * (n + 1), &ok, &e);
+    /*
+     * Scratch of the broad phase in arrays it leaves free (as arrivals in count above), 44 bytes
+     * a particle in double precision: the forces f and torques t are dead from a step's first
+     * kick to its gather, the broad phase included (sim_step), and second_count outside the
+     * gather's second_lists. The traversal's candidates live in f, the radix sort's key scratch
+     * in t (8 bytes a particle, within its 3 reals) and its value scratch in second_count.
+     */
+    cl_mem *alias[3][2] = {
+        {&m->cand, &m->f}, {&m->codes_tmp, &m->t}, {&m->idx_tmp, &m->second_count}};
+    for (int i = 0; i < 3 && ok; i++) {
+        if ((e = clRetainMemObject(*alias[i][1])) == CL_SUCCESS)
+            *alias[i][0] = *alias[i][1];
+        else
+            ok = 0;
+    }
     /* stats rows: a few work-items per compute unit, fewer where the walls' partial sums (six
      * reals per wall and work-item) would pass 16 MiB */
     long parts = 64L * (dev->compute_units > 0 ? dev->compute_units : 1);

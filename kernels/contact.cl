@@ -39,16 +39,17 @@ __kernel void contact_forces(
     __global const int *carry_offset, __global const pd_real *carry_spring,
     __global const pd_real *carry_kt, __global const pd_real *carry_point,
     __global const pd_real *x, __global const pd_real *q, __global const pd_real *v,
-    __global const pd_real *w, __global const pd_real *size, __global const pd_real *inv_m,
-    __global const int *shape, __global const int *material, __global const pd_real *vert,
-    __global const int *tri, __global const int *voff, __global const int *toff,
-    __global const int *vt_off, __global const int *vt, __global const int *kind,
-    __global const pd_real *radius_ratio, __global const pd_real *params, int nmat, int nparticles,
-    pd_real dt, __global const pd_real *wnode_box, __global const int *wnode_kid,
-    __global const int *wnode_off, __global const int *wtri_order, int wall_cap, int nwall,
-    __global int *status, __global int *iscr, __global pd_real *rscr, int ilen, int rlen,
-    int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap, pd_real list_life,
-    __global pd_real *force, __global pd_real *point, __global pd_real *spring,
+    __global const pd_real *L, __global const pd_real *w_wall, __global const pd_real *size,
+    __global const pd_real *inv_m, __global const int *shape, __global const int *material,
+    __global const pd_real *unit_inertia, __global const pd_real *density,
+    __global const pd_real *vert, __global const int *tri, __global const int *voff,
+    __global const int *toff, __global const int *vt_off, __global const int *vt,
+    __global const int *kind, __global const pd_real *radius_ratio, __global const pd_real *params,
+    int nmat, int nparticles, pd_real dt, __global const pd_real *wnode_box,
+    __global const int *wnode_kid, __global const int *wnode_off, __global const int *wtri_order,
+    int wall_cap, int nwall, __global int *status, __global int *iscr, __global pd_real *rscr,
+    int ilen, int rlen, int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap,
+    pd_real list_life, __global pd_real *force, __global pd_real *point, __global pd_real *spring,
     __global pd_real *kt, __global float *info)
 {
     int g = (int)get_global_id(0);
@@ -57,7 +58,10 @@ __kernel void contact_forces(
     wd.x = x;
     wd.q = q;
     wd.v = v;
-    wd.w = w;
+    wd.L = L;
+    wd.w_wall = w_wall;
+    wd.unit_inertia = unit_inertia;
+    wd.density = density;
     wd.size = size;
     wd.inv_m = inv_m;
     wd.shape = shape;

@@ -18,8 +18,8 @@ __kernel void integrate_kick(__global pd_real *v, __global pd_real *L, __global 
 }
 
 /*
- * Drift: x += v dt, and q turned by Euler's equations at constant L; omega receives the world
- * angular velocity at the new orientation (what the contact stage uses for surface velocities).
+ * Drift: x += v dt, and q turned by Euler's equations at constant L (the contact stage takes the
+ * angular velocity at the new orientation from q and L: cp_omega, contact_pair.h).
  * A particle whose position, velocity or angular momentum is not finite is reported by the
  * lowest such index in status[1] (atomic_min: the host names the first one). A particle that has
  * moved more than half the broad phase's skin from x_ref (its position when the pair list was
@@ -28,12 +28,12 @@ __kernel void integrate_kick(__global pd_real *v, __global pd_real *L, __global 
  * until their particles' travel reaches their certified gap (contact.cl).
  */
 __kernel void integrate_drift(__global pd_real *x, __global const pd_real *v, __global pd_real *q,
-                              __global const pd_real *L, __global const int *material,
-                              __global pd_real *omega, int n, pd_real dt, __global int *status,
-                              __global const pd_real *x_ref, pd_real half_skin2,
-                              __global const pd_real *size, __global const int *shape,
-                              __global const pd_real *radius_ratio, __global pd_real *travel,
-                              __global const pd_real *unit_inertia, __global const pd_real *density)
+                              __global const pd_real *L, __global const int *material, int n,
+                              pd_real dt, __global int *status, __global const pd_real *x_ref,
+                              pd_real half_skin2, __global const pd_real *size,
+                              __global const int *shape, __global const pd_real *radius_ratio,
+                              __global pd_real *travel, __global const pd_real *unit_inertia,
+                              __global const pd_real *density)
 {
     int i = (int)get_global_id(0);
     if (i >= n) return;
@@ -47,8 +47,6 @@ __kernel void integrate_drift(__global pd_real *x, __global const pd_real *v, __
     qi[1] = r.x;
     qi[2] = r.y;
     qi[3] = r.z;
-    pd_v3 wb = int_omega_body(r, Li, ii);
-    v3_store(omega, i, q4_rotate(r, wb));
     pd_real s = xi.x + xi.y + xi.z + v3_dot(v3_load(v, i), v3(1, 1, 1)) + Li.x + Li.y + Li.z;
     if (!isfinite(s)) atomic_min(status + 1, i);
     pd_v3 moved = v3_sub(xi, v3_load(x_ref, i));
