@@ -753,6 +753,51 @@ static void reuse_is_exact(const char *precision)
     CHECK_EQ_INT(0, bed_certified);
 }
 
+/*
+ * Issue 3's memory target (<= 1 KB per Schönhardt particle in a dense bed; bench/RESULTS.md,
+ * 2026-12-01: 986 bytes in the 1e3 bed) rests on the layout this checks, so that an array added
+ * per particle or per pair shows here rather than in a bench nobody reran. Per particle, besides
+ * the pair arrays and the overlap scratch: the state (x, q, v, L, size, inverse mass, shape,
+ * material), forces and torques (f holding the traversal's candidates too), the tree and its
+ * sort, reference positions, travel and list offsets: 312 bytes in double precision, 224 in
+ * single, plus the run's fixed buffers (shapes, walls, stats: under 16 bytes a particle at 8 000).
+ * Per pair slot: 8 (key) + 7 reals (spring, stiffness, contact point) in the list and in the
+ * carried copy, 3 reals + 8 (force, info, second-body list) in the work arrays.
+ */
+static void check_memory(const char *precision, double rs, double per_particle)
+{
+    char json[1500];
+    snprintf(json, sizeof json,
+             "{\"name\": \"mem\", \"precision\": \"%s\", \"time\": {\"dt\": 1e-5, \"duration\": 1},"
+             " \"materials\": {\"m\": {\"density\": 2600, \"youngs_modulus\": 1e6, "
+             "\"poisson_ratio\": 0.25}}, \"interactions\": [{\"between\": [\"m\", \"m\"], "
+             "\"friction\": 0.5, \"damping\": 0.3}], \"shapes\": {\"s\": {\"builtin\": "
+             "\"schonhardt\"}}, \"particles\": [{\"shape\": \"s\", \"material\": \"m\", \"count\": "
+             "8000, \"size\": 0.01, \"region\": {\"min\": [0, 0, 0], \"max\": [0.4, 0.4, 0.4]}, "
+             "\"arrangement\": \"lattice\", \"orientation\": \"random\"}], \"walls\": [{\"name\": "
+             "\"floor\", \"material\": \"m\", \"box\": {\"min\": [-1, -1, -0.1], \"max\": [1, 1, "
+             "-0.01]}}]}",
+             precision);
+    run r;
+    if (start(&r, json)) return;
+    sim *m = r.m;
+    double scratch = (double)m->nwork * (4.0 * m->ilen + rs * m->rlen);
+    double pairs = (double)m->pairs.cap * (8 + 7 * rs) + (double)m->carry.cap * (8 + 7 * rs) +
+                   (double)m->work_cap * (3 * rs + 8);
+    double rest = (m->bytes - scratch - pairs) / m->n;
+    printf("  %s: %.1f bytes a particle besides %zu pair slots and the scratch\n", precision, rest,
+           m->pairs.cap);
+    CHECK(m->pairs.cap > 0 && m->work_cap > 0);
+    CHECK(rest >= per_particle && rest <= per_particle + 16);
+    finish(&r);
+}
+
+TEST(memory_per_particle_is_bounded)
+{
+    if (pd_device_has_fp64(dev)) check_memory("double", 8, 312);
+    check_memory("single", 4, 224);
+}
+
 TEST(pair_list_reuse_is_exact)
 {
     if (pd_device_has_fp64(dev)) reuse_is_exact("double");
@@ -1410,6 +1455,7 @@ int main(void)
     RUN(single_precision_flat_face_on_a_meshed_floor);
     RUN(divergence_is_reported);
     RUN(stats_rows_match_host_sums);
+    RUN(memory_per_particle_is_bounded);
     pd_device_close(dev);
     return TEST_DONE();
 }
