@@ -72,6 +72,8 @@ typedef struct sim {
     cl_mem wnode_box, wnode_kid, wnode_off, wtri_order;
     int wall_cap; /* most triangles of one wall that can be near one particle */
     /* broad phase */
+    /* arrivals, codes_tmp, idx_tmp and cand share the memory of count, t, second_count and f,
+     * free while the broad phase uses them (sim_create) */
     cl_mem wbox, tbox, left, right, parent, arrivals, codes, idx, codes_tmp, idx_tmp;
     cl_mem count, offset, status;
     cl_mem cand; /* broad phase: the first BVH_CAND partners of each particle, while counting */
