@@ -168,8 +168,6 @@ static cl_mem grow(pd_device *dev, cl_mem b, size_t *cap, size_t need, cl_int *e
     return clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * *cap, NULL, e);
 }
 
-#define SETARG(k, i, v) (clSetKernelArg(k, i, sizeof(v), &(v)))
-
 /*
  * The traversal alone, depth first (the pipeline's broad_count, with the arguments its last step
  * set) against breadth first; prints ms per traversal and the pairs each found.
@@ -239,15 +237,15 @@ static int traversal_compare(sim *m, int reps)
             emit = grow(dev, emit, &ecap, (size_t)nf + 1, &e);
             off = grow(dev, off, &ocap, (size_t)nf + 1, &e);
             if (e != CL_SUCCESS) break;
-            e |= SETARG(kc, 0, m->tbox);
-            e |= SETARG(kc, 1, m->left);
-            e |= SETARG(kc, 2, m->right);
-            e |= SETARG(kc, 3, n);
+            e |= CL_ARG(kc, 0, m->tbox);
+            e |= CL_ARG(kc, 1, m->left);
+            e |= CL_ARG(kc, 2, m->right);
+            e |= CL_ARG(kc, 3, n);
             e |= sim_body_box_args(m, kc, 4);
-            e |= SETARG(kc, 9, fb[cur][0]);
-            e |= SETARG(kc, 10, fb[cur][1]);
-            e |= SETARG(kc, 11, nf);
-            e |= SETARG(kc, 12, emit);
+            e |= CL_ARG(kc, 9, fb[cur][0]);
+            e |= CL_ARG(kc, 10, fb[cur][1]);
+            e |= CL_ARG(kc, 11, nf);
+            e |= CL_ARG(kc, 12, emit);
             if (e != CL_SUCCESS) break;
             rc = cl_launch(dev, kc, (size_t)nf, "bfs_count", &err);
             if (rc == PD_OK) rc = dsort_scan(&m->sort, emit, nf, off, &err);
@@ -258,19 +256,19 @@ static int traversal_compare(sim *m, int reps)
             for (int k = 0; k < 2 && e == CL_SUCCESS; k++)
                 fb[1 - cur][k] = grow(dev, fb[1 - cur][k], &fcap[1 - cur][k], (size_t)next + 1, &e);
             if (e != CL_SUCCESS || rc != PD_OK) break;
-            e |= SETARG(kw, 0, m->tbox);
-            e |= SETARG(kw, 1, m->left);
-            e |= SETARG(kw, 2, m->right);
-            e |= SETARG(kw, 3, m->idx);
-            e |= SETARG(kw, 4, n);
+            e |= CL_ARG(kw, 0, m->tbox);
+            e |= CL_ARG(kw, 1, m->left);
+            e |= CL_ARG(kw, 2, m->right);
+            e |= CL_ARG(kw, 3, m->idx);
+            e |= CL_ARG(kw, 4, n);
             e |= sim_body_box_args(m, kw, 5);
-            e |= SETARG(kw, 10, fb[cur][0]);
-            e |= SETARG(kw, 11, fb[cur][1]);
-            e |= SETARG(kw, 12, nf);
-            e |= SETARG(kw, 13, off);
-            e |= SETARG(kw, 14, fb[1 - cur][0]);
-            e |= SETARG(kw, 15, fb[1 - cur][1]);
-            e |= SETARG(kw, 16, count);
+            e |= CL_ARG(kw, 10, fb[cur][0]);
+            e |= CL_ARG(kw, 11, fb[cur][1]);
+            e |= CL_ARG(kw, 12, nf);
+            e |= CL_ARG(kw, 13, off);
+            e |= CL_ARG(kw, 14, fb[1 - cur][0]);
+            e |= CL_ARG(kw, 15, fb[1 - cur][1]);
+            e |= CL_ARG(kw, 16, count);
             if (e != CL_SUCCESS) break;
             rc = cl_launch(dev, kw, (size_t)nf, "bfs_write", &err);
             cur = 1 - cur;

@@ -34,6 +34,13 @@ const char *cl_errstr(cl_int e);
 #define CL_FAIL(err, what, e)                                                                      \
     pd_error_set(err, PD_ECL, "opencl: %s failed: %s (%d)", what, cl_errstr(e), (int)(e))
 
+/* Sets argument i of kernel k to the value v (a variable: its size is taken). */
+#define CL_ARG(k, i, v) (clSetKernelArg(k, i, sizeof(v), &(v)))
+
+/* The error for kernel arguments that could not be set (CL_ARG's results or'ed together). */
+#define CL_ARG_FAIL(err, kernel)                                                                   \
+    pd_error_set(err, PD_ECL, "opencl: setting the arguments of %s failed", kernel)
+
 /*
  * A program's build variant: bit 0 double precision (PD_DOUBLE), CL_PLACES the overlap's separate
  * places compiled in (OVL_PLACES_BUILD, kernels/overlap_predicates.h; off, an overlap costs what

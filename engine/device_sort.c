@@ -70,28 +70,26 @@ static void split(int n, int max_work, int min_chunk, int *nwork, int *chunk)
     if (*nwork < 1) *nwork = 1;
 }
 
-#define ARG(k, i, v) (clSetKernelArg(k, i, sizeof(v), &(v)))
-
 int dsort_scan(dsort *s, cl_mem in, int n, cl_mem out, pd_error *err)
 {
     int nwork, chunk;
     split(n, SCAN_MAX_WORK, 64, &nwork, &chunk);
     cl_int e = CL_SUCCESS;
-    e |= ARG(s->k_partial, 0, in);
-    e |= ARG(s->k_partial, 1, n);
-    e |= ARG(s->k_partial, 2, chunk);
-    e |= ARG(s->k_partial, 3, nwork);
-    e |= ARG(s->k_partial, 4, s->part);
-    e |= ARG(s->k_top, 0, s->part);
-    e |= ARG(s->k_top, 1, nwork);
-    e |= ARG(s->k_top, 2, out);
-    e |= ARG(s->k_top, 3, n);
-    e |= ARG(s->k_apply, 0, in);
-    e |= ARG(s->k_apply, 1, n);
-    e |= ARG(s->k_apply, 2, chunk);
-    e |= ARG(s->k_apply, 3, nwork);
-    e |= ARG(s->k_apply, 4, s->part);
-    e |= ARG(s->k_apply, 5, out);
+    e |= CL_ARG(s->k_partial, 0, in);
+    e |= CL_ARG(s->k_partial, 1, n);
+    e |= CL_ARG(s->k_partial, 2, chunk);
+    e |= CL_ARG(s->k_partial, 3, nwork);
+    e |= CL_ARG(s->k_partial, 4, s->part);
+    e |= CL_ARG(s->k_top, 0, s->part);
+    e |= CL_ARG(s->k_top, 1, nwork);
+    e |= CL_ARG(s->k_top, 2, out);
+    e |= CL_ARG(s->k_top, 3, n);
+    e |= CL_ARG(s->k_apply, 0, in);
+    e |= CL_ARG(s->k_apply, 1, n);
+    e |= CL_ARG(s->k_apply, 2, chunk);
+    e |= CL_ARG(s->k_apply, 3, nwork);
+    e |= CL_ARG(s->k_apply, 4, s->part);
+    e |= CL_ARG(s->k_apply, 5, out);
     if (e != CL_SUCCESS) return pd_error_set(err, PD_ECL, "opencl: scan arguments");
     int rc = cl_launch(s->dev, s->k_partial, (size_t)nwork, "scan_partial", err);
     if (rc == PD_OK) rc = cl_launch(s->dev, s->k_top, 1, "scan_top", err);
@@ -124,21 +122,21 @@ int dsort_radix(dsort *s, cl_mem *key, cl_mem *val, cl_mem *key_tmp, cl_mem *val
     for (int p = 0; p < npass; p++) {
         int shift = shifts[p];
         cl_int e = CL_SUCCESS;
-        e |= ARG(s->k_count, 0, *key);
-        e |= ARG(s->k_count, 1, n);
-        e |= ARG(s->k_count, 2, chunk);
-        e |= ARG(s->k_count, 3, nwork);
-        e |= ARG(s->k_count, 4, shift);
-        e |= ARG(s->k_count, 5, s->count);
-        e |= ARG(s->k_scatter, 0, *key);
-        e |= ARG(s->k_scatter, 1, *val);
-        e |= ARG(s->k_scatter, 2, n);
-        e |= ARG(s->k_scatter, 3, chunk);
-        e |= ARG(s->k_scatter, 4, nwork);
-        e |= ARG(s->k_scatter, 5, shift);
-        e |= ARG(s->k_scatter, 6, s->first);
-        e |= ARG(s->k_scatter, 7, *key_tmp);
-        e |= ARG(s->k_scatter, 8, *val_tmp);
+        e |= CL_ARG(s->k_count, 0, *key);
+        e |= CL_ARG(s->k_count, 1, n);
+        e |= CL_ARG(s->k_count, 2, chunk);
+        e |= CL_ARG(s->k_count, 3, nwork);
+        e |= CL_ARG(s->k_count, 4, shift);
+        e |= CL_ARG(s->k_count, 5, s->count);
+        e |= CL_ARG(s->k_scatter, 0, *key);
+        e |= CL_ARG(s->k_scatter, 1, *val);
+        e |= CL_ARG(s->k_scatter, 2, n);
+        e |= CL_ARG(s->k_scatter, 3, chunk);
+        e |= CL_ARG(s->k_scatter, 4, nwork);
+        e |= CL_ARG(s->k_scatter, 5, shift);
+        e |= CL_ARG(s->k_scatter, 6, s->first);
+        e |= CL_ARG(s->k_scatter, 7, *key_tmp);
+        e |= CL_ARG(s->k_scatter, 8, *val_tmp);
         if (e != CL_SUCCESS) return pd_error_set(err, PD_ECL, "opencl: radix sort arguments");
         int rc = cl_launch(dev, s->k_count, (size_t)nwork, "radix_count", err);
         if (rc == PD_OK) rc = dsort_scan(s, s->count, (int)need, s->first, err);

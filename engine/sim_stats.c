@@ -12,13 +12,10 @@
 
 #include "sim.h"
 
-#define ARG(k, i, v) (clSetKernelArg(k, i, sizeof(v), &(v)))
-
-/* Reads cnt ints of buffer b. */
-static int read_ints(sim *m, cl_mem b, size_t cnt, int *out, pd_error *err)
+/* Reads the first `bytes` of buffer b as they are (the shares' ints and floats). */
+static int read_raw(sim *m, cl_mem b, size_t bytes, void *out, pd_error *err)
 {
-    cl_int e =
-        clEnqueueReadBuffer(m->dev->queue, b, CL_TRUE, 0, sizeof(int) * cnt, out, 0, NULL, NULL);
+    cl_int e = clEnqueueReadBuffer(m->dev->queue, b, CL_TRUE, 0, bytes, out, 0, NULL, NULL);
     return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueReadBuffer(stats)", e);
 }
 
@@ -40,24 +37,23 @@ int sim_stats_energy(sim *m, double *ke, int *worst, pd_error *err)
     *worst = 0;
     int parts = shares(m, m->n);
     cl_kernel k = m->k_stats_energy;
-    cl_int e = ARG(k, 0, m->q);
-    e |= ARG(k, 1, m->v);
-    e |= ARG(k, 2, m->L);
-    e |= ARG(k, 3, m->inv_m);
-    e |= ARG(k, 4, m->shape);
-    e |= ARG(k, 5, m->material);
-    e |= ARG(k, 6, m->size);
-    e |= ARG(k, 7, m->unit_inertia);
-    e |= ARG(k, 8, m->density);
-    e |= ARG(k, 9, m->n);
+    cl_int e = CL_ARG(k, 0, m->q);
+    e |= CL_ARG(k, 1, m->v);
+    e |= CL_ARG(k, 2, m->L);
+    e |= CL_ARG(k, 3, m->inv_m);
+    e |= CL_ARG(k, 4, m->shape);
+    e |= CL_ARG(k, 5, m->material);
+    e |= CL_ARG(k, 6, m->size);
+    e |= CL_ARG(k, 7, m->unit_inertia);
+    e |= CL_ARG(k, 8, m->density);
+    e |= CL_ARG(k, 9, m->n);
     int sp = span(m, m->n, parts);
-    e |= ARG(k, 10, parts);
-    e |= ARG(k, 11, sp);
-    e |= ARG(k, 12, m->st_sum);
-    e |= ARG(k, 13, m->st_emax);
-    e |= ARG(k, 14, m->st_imax);
-    if (e != CL_SUCCESS)
-        return pd_error_set(err, PD_ECL, "opencl: setting the arguments of stats_energy failed");
+    e |= CL_ARG(k, 10, parts);
+    e |= CL_ARG(k, 11, sp);
+    e |= CL_ARG(k, 12, m->st_sum);
+    e |= CL_ARG(k, 13, m->st_emax);
+    e |= CL_ARG(k, 14, m->st_imax);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "stats_energy");
     int rc = cl_launch(m->dev, k, (size_t)parts, "stats_energy", err);
     if (rc != PD_OK) return rc;
     double *sum = malloc(sizeof(double) * 2 * (size_t)parts);
@@ -69,7 +65,7 @@ int sim_stats_energy(sim *m, double *ke, int *worst, pd_error *err)
     double *emax = sum + parts;
     if ((rc = sim_read(m, m->st_sum, 0, (size_t)parts, sum, err)) != PD_OK ||
         (rc = sim_read(m, m->st_emax, 0, (size_t)parts, emax, err)) != PD_OK ||
-        (rc = read_ints(m, m->st_imax, (size_t)parts, imax, err)) != PD_OK)
+        (rc = read_raw(m, m->st_imax, sizeof(int) * (size_t)parts, imax, err)) != PD_OK)
         goto done;
     double best = -1;
     for (int g = 0; g < parts; g++) {
@@ -95,19 +91,18 @@ int sim_stats_contacts(sim *m, long *contacts, double *max_ratio, double *wall_f
     int parts = shares(m, m->npairs);
     if (parts == 0) return PD_OK;
     cl_kernel k = m->k_stats_contacts;
-    cl_int e = ARG(k, 0, m->pairs.keys);
-    e |= ARG(k, 1, m->info);
-    e |= ARG(k, 2, m->force);
-    e |= ARG(k, 3, m->npairs);
-    e |= ARG(k, 4, m->nwall);
+    cl_int e = CL_ARG(k, 0, m->pairs.keys);
+    e |= CL_ARG(k, 1, m->info);
+    e |= CL_ARG(k, 2, m->force);
+    e |= CL_ARG(k, 3, m->npairs);
+    e |= CL_ARG(k, 4, m->nwall);
     int sp = span(m, m->npairs, parts);
-    e |= ARG(k, 5, parts);
-    e |= ARG(k, 6, sp);
-    e |= ARG(k, 7, m->st_count);
-    e |= ARG(k, 8, m->st_ratio);
-    e |= ARG(k, 9, m->st_wall);
-    if (e != CL_SUCCESS)
-        return pd_error_set(err, PD_ECL, "opencl: setting the arguments of stats_contacts failed");
+    e |= CL_ARG(k, 5, parts);
+    e |= CL_ARG(k, 6, sp);
+    e |= CL_ARG(k, 7, m->st_count);
+    e |= CL_ARG(k, 8, m->st_ratio);
+    e |= CL_ARG(k, 9, m->st_wall);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "stats_contacts");
     int rc = cl_launch(m->dev, k, (size_t)parts, "stats_contacts", err);
     if (rc != PD_OK) return rc;
     int *count = malloc(sizeof(int) * (size_t)parts);
@@ -117,14 +112,9 @@ int sim_stats_contacts(sim *m, long *contacts, double *max_ratio, double *wall_f
         rc = pd_error_set(err, PD_ENOMEM, "run: out of memory for stats");
         goto done;
     }
-    if ((rc = read_ints(m, m->st_count, (size_t)parts, count, err)) != PD_OK) goto done;
-    e = clEnqueueReadBuffer(m->dev->queue, m->st_ratio, CL_TRUE, 0, sizeof(float) * (size_t)parts,
-                            ratio, 0, NULL, NULL);
-    if (e != CL_SUCCESS) {
-        rc = CL_FAIL(err, "clEnqueueReadBuffer(stats)", e);
-        goto done;
-    }
-    if (W && (rc = sim_read(m, m->st_wall, 0, 6 * W * (size_t)parts, wall, err)) != PD_OK)
+    if ((rc = read_raw(m, m->st_count, sizeof(int) * (size_t)parts, count, err)) != PD_OK ||
+        (rc = read_raw(m, m->st_ratio, sizeof(float) * (size_t)parts, ratio, err)) != PD_OK ||
+        (W && (rc = sim_read(m, m->st_wall, 0, 6 * W * (size_t)parts, wall, err)) != PD_OK))
         goto done;
     for (int g = 0; g < parts; g++) {
         *contacts += count[g];

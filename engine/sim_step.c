@@ -9,8 +9,6 @@
 
 #include "sim.h"
 
-#define ARG(k, i, v) (clSetKernelArg(k, i, sizeof(v), &(v)))
-
 static double clock_now(void)
 {
     struct timespec ts;
@@ -38,17 +36,12 @@ static cl_int arg_real(sim *m, cl_kernel k, int i, double v)
 
 cl_int sim_body_box_args(sim *m, cl_kernel k, int first)
 {
-    cl_int e = ARG(k, first, m->x);
-    e |= ARG(k, first + 1, m->size);
-    e |= ARG(k, first + 2, m->shape);
-    e |= ARG(k, first + 3, m->radius_ratio);
+    cl_int e = CL_ARG(k, first, m->x);
+    e |= CL_ARG(k, first + 1, m->size);
+    e |= CL_ARG(k, first + 2, m->shape);
+    e |= CL_ARG(k, first + 3, m->radius_ratio);
     e |= arg_real(m, k, first + 4, m->margin + 0.5 * m->skin); /* the skin: see reuse_pairs */
     return e;
-}
-
-static int arg_fail(pd_error *err, const char *kernel)
-{
-    return pd_error_set(err, PD_ECL, "opencl: setting the arguments of %s failed", kernel);
 }
 
 /*
@@ -167,12 +160,12 @@ static int keep_history(sim *m, pd_error *err)
         return grow_pairs(m, &m->carry, 0, "clCreateBuffer(carried pairs)", err);
     }
     cl_kernel k = m->k_hist_count;
-    e |= ARG(k, 0, m->offset);
-    e |= ARG(k, 1, m->pairs.spring);
-    e |= ARG(k, 2, m->pairs.kt);
-    e |= ARG(k, 3, n);
-    e |= ARG(k, 4, m->count);
-    if (e != CL_SUCCESS) return arg_fail(err, "history_count");
+    e |= CL_ARG(k, 0, m->offset);
+    e |= CL_ARG(k, 1, m->pairs.spring);
+    e |= CL_ARG(k, 2, m->pairs.kt);
+    e |= CL_ARG(k, 3, n);
+    e |= CL_ARG(k, 4, m->count);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "history_count");
     if ((rc = cl_launch(dev, k, (size_t)n, "history_count", err)) != PD_OK) return rc;
     if ((rc = dsort_scan(&m->sort, m->count, n, m->carry_offset, err)) != PD_OK) return rc;
     cl_int total = 0;
@@ -182,18 +175,18 @@ static int keep_history(sim *m, pd_error *err)
     rc = grow_pairs(m, &m->carry, (size_t)total, "clCreateBuffer(carried pairs)", err);
     if (rc != PD_OK) return rc;
     k = m->k_hist_keep;
-    e |= ARG(k, 0, m->offset);
-    e |= ARG(k, 1, m->pairs.keys);
-    e |= ARG(k, 2, m->pairs.spring);
-    e |= ARG(k, 3, m->pairs.kt);
-    e |= ARG(k, 4, m->pairs.point);
-    e |= ARG(k, 5, n);
-    e |= ARG(k, 6, m->carry_offset);
-    e |= ARG(k, 7, m->carry.keys);
-    e |= ARG(k, 8, m->carry.spring);
-    e |= ARG(k, 9, m->carry.kt);
-    e |= ARG(k, 10, m->carry.point);
-    if (e != CL_SUCCESS) return arg_fail(err, "history_keep");
+    e |= CL_ARG(k, 0, m->offset);
+    e |= CL_ARG(k, 1, m->pairs.keys);
+    e |= CL_ARG(k, 2, m->pairs.spring);
+    e |= CL_ARG(k, 3, m->pairs.kt);
+    e |= CL_ARG(k, 4, m->pairs.point);
+    e |= CL_ARG(k, 5, n);
+    e |= CL_ARG(k, 6, m->carry_offset);
+    e |= CL_ARG(k, 7, m->carry.keys);
+    e |= CL_ARG(k, 8, m->carry.spring);
+    e |= CL_ARG(k, 9, m->carry.kt);
+    e |= CL_ARG(k, 10, m->carry.point);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "history_keep");
     if ((rc = cl_launch(dev, k, (size_t)n, "history_keep", err)) != PD_OK) return rc;
     return PD_OK;
 }
@@ -221,14 +214,14 @@ static int list_built(sim *m, pd_error *err)
 /* The arguments broad_count and broad_write share: the tree, the bodies' boxes, the walls'. */
 static cl_int traversal_args(sim *m, cl_kernel k)
 {
-    cl_int e = ARG(k, 0, m->tbox);
-    e |= ARG(k, 1, m->left);
-    e |= ARG(k, 2, m->right);
-    e |= ARG(k, 3, m->idx);
-    e |= ARG(k, 4, m->n);
+    cl_int e = CL_ARG(k, 0, m->tbox);
+    e |= CL_ARG(k, 1, m->left);
+    e |= CL_ARG(k, 2, m->right);
+    e |= CL_ARG(k, 3, m->idx);
+    e |= CL_ARG(k, 4, m->n);
     e |= sim_body_box_args(m, k, 5);
-    e |= ARG(k, 10, m->wbox);
-    e |= ARG(k, 11, m->nwall);
+    e |= CL_ARG(k, 10, m->wbox);
+    e |= CL_ARG(k, 11, m->nwall);
     return e;
 }
 
@@ -251,16 +244,16 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     /* small runs: the traversal kernels test every pair of boxes instead of building a tree */
     int brute = n <= SIM_BRUTE_MAX;
     if (!brute) {
-        e |= ARG(m->k_codes, 0, m->x);
-        e |= ARG(m->k_codes, 1, n);
+        e |= CL_ARG(m->k_codes, 0, m->x);
+        e |= CL_ARG(m->k_codes, 1, n);
         for (int k = 0; k < 3; k++) {
             e |= arg_real(m, m->k_codes, 2 + k, m->lo[k]);
             e |= arg_real(m, m->k_codes, 5 + k, m->inv_ext[k]);
         }
-        e |= ARG(m->k_codes, 8, m->codes);
-        e |= ARG(m->k_codes, 9, m->idx);
-        e |= ARG(m->k_codes, 10, morton_drop);
-        if (e != CL_SUCCESS) return arg_fail(err, "bvh_codes");
+        e |= CL_ARG(m->k_codes, 8, m->codes);
+        e |= CL_ARG(m->k_codes, 9, m->idx);
+        e |= CL_ARG(m->k_codes, 10, morton_drop);
+        if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "bvh_codes");
         if ((rc = cl_launch(dev, m->k_codes, (size_t)n, "bvh_codes", err)) != PD_OK) return rc;
         static const int morton_shifts[4] = {0, 8, 16, 24}; /* codes of 32 bits (morton_drop) */
         /* an even number of passes leaves the results in codes and idx, and the scratch in the
@@ -272,21 +265,21 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
         if (rc != PD_OK) return rc;
 
         e |= sim_body_box_args(m, m->k_leaves, 0);
-        e |= ARG(m->k_leaves, 5, m->idx);
-        e |= ARG(m->k_leaves, 6, n);
-        e |= ARG(m->k_leaves, 7, m->tbox);
-        e |= ARG(m->k_nodes, 0, m->codes);
-        e |= ARG(m->k_nodes, 1, n);
-        e |= ARG(m->k_nodes, 2, m->left);
-        e |= ARG(m->k_nodes, 3, m->right);
-        e |= ARG(m->k_nodes, 4, m->parent);
-        e |= ARG(m->k_refit, 0, m->tbox);
-        e |= ARG(m->k_refit, 1, m->left);
-        e |= ARG(m->k_refit, 2, m->right);
-        e |= ARG(m->k_refit, 3, m->parent);
-        e |= ARG(m->k_refit, 4, n);
-        e |= ARG(m->k_refit, 5, m->arrivals);
-        if (e != CL_SUCCESS) return arg_fail(err, "bvh_leaves/bvh_nodes/bvh_refit");
+        e |= CL_ARG(m->k_leaves, 5, m->idx);
+        e |= CL_ARG(m->k_leaves, 6, n);
+        e |= CL_ARG(m->k_leaves, 7, m->tbox);
+        e |= CL_ARG(m->k_nodes, 0, m->codes);
+        e |= CL_ARG(m->k_nodes, 1, n);
+        e |= CL_ARG(m->k_nodes, 2, m->left);
+        e |= CL_ARG(m->k_nodes, 3, m->right);
+        e |= CL_ARG(m->k_nodes, 4, m->parent);
+        e |= CL_ARG(m->k_refit, 0, m->tbox);
+        e |= CL_ARG(m->k_refit, 1, m->left);
+        e |= CL_ARG(m->k_refit, 2, m->right);
+        e |= CL_ARG(m->k_refit, 3, m->parent);
+        e |= CL_ARG(m->k_refit, 4, n);
+        e |= CL_ARG(m->k_refit, 5, m->arrivals);
+        if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "bvh_leaves/bvh_nodes/bvh_refit");
         if ((rc = cl_launch(dev, m->k_leaves, (size_t)n, "bvh_leaves", err)) != PD_OK) return rc;
         if (n > 1) {
             if ((rc = cl_launch(dev, m->k_nodes, (size_t)n - 1, "bvh_nodes", err)) != PD_OK)
@@ -300,10 +293,10 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     }
     stage_end(m, SIM_BVH, t0);
     e |= traversal_args(m, m->k_count);
-    e |= ARG(m->k_count, 12, m->count);
-    e |= ARG(m->k_count, 13, m->cand);
-    e |= ARG(m->k_count, 14, brute);
-    if (e != CL_SUCCESS) return arg_fail(err, "broad_count");
+    e |= CL_ARG(m->k_count, 12, m->count);
+    e |= CL_ARG(m->k_count, 13, m->cand);
+    e |= CL_ARG(m->k_count, 14, brute);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "broad_count");
     if ((rc = cl_launch(dev, m->k_count, (size_t)n, "broad_count", err)) != PD_OK) return rc;
     if ((rc = dsort_scan(&m->sort, m->count, n, m->offset, err)) != PD_OK) return rc;
     /* the one value the host needs every step; the divergence flag comes with it */
@@ -320,12 +313,12 @@ static int broad_phase(sim *m, double *t0, pd_error *err)
     m->npairs = total;
 
     e |= traversal_args(m, m->k_write);
-    e |= ARG(m->k_write, 12, m->offset);
-    e |= ARG(m->k_write, 13, m->cand);
-    e |= ARG(m->k_write, 14, m->second_list); /* scratch until the gather lists into it */
-    e |= ARG(m->k_write, 15, m->pairs.keys);
-    e |= ARG(m->k_write, 16, brute);
-    if (e != CL_SUCCESS) return arg_fail(err, "broad_write");
+    e |= CL_ARG(m->k_write, 12, m->offset);
+    e |= CL_ARG(m->k_write, 13, m->cand);
+    e |= CL_ARG(m->k_write, 14, m->second_list); /* scratch until the gather lists into it */
+    e |= CL_ARG(m->k_write, 15, m->pairs.keys);
+    e |= CL_ARG(m->k_write, 16, brute);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "broad_write");
     rc = cl_launch(dev, m->k_write, (size_t)n, "broad_write", err);
     if (rc == PD_OK) rc = list_built(m, err);
     stage_end(m, SIM_TRAVERSE, t0);
@@ -338,14 +331,14 @@ static int contacts(sim *m, pd_error *err)
     cl_kernel k = m->k_contact;
     int a = 0, nwork = m->npairs < m->nwork ? m->npairs : m->nwork;
     cl_int e = CL_SUCCESS;
-    e |= ARG(k, a++, m->pairs.keys);
-    e |= ARG(k, a++, m->npairs);
-    e |= ARG(k, a++, m->list_fresh);
-    e |= ARG(k, a++, m->carry.keys);
-    e |= ARG(k, a++, m->carry_offset);
-    e |= ARG(k, a++, m->carry.spring);
-    e |= ARG(k, a++, m->carry.kt);
-    e |= ARG(k, a++, m->carry.point);
+    e |= CL_ARG(k, a++, m->pairs.keys);
+    e |= CL_ARG(k, a++, m->npairs);
+    e |= CL_ARG(k, a++, m->list_fresh);
+    e |= CL_ARG(k, a++, m->carry.keys);
+    e |= CL_ARG(k, a++, m->carry_offset);
+    e |= CL_ARG(k, a++, m->carry.spring);
+    e |= CL_ARG(k, a++, m->carry.kt);
+    e |= CL_ARG(k, a++, m->carry.point);
     cl_mem body[] = {m->x,
                      m->q,
                      m->v,
@@ -367,30 +360,30 @@ static int contacts(sim *m, pd_error *err)
                      m->radius_ratio,
                      m->params};
     for (size_t i = 0; i < sizeof body / sizeof body[0]; i++)
-        e |= ARG(k, a++, body[i]);
-    e |= ARG(k, a++, m->nmat);
-    e |= ARG(k, a++, m->n);
+        e |= CL_ARG(k, a++, body[i]);
+    e |= CL_ARG(k, a++, m->nmat);
+    e |= CL_ARG(k, a++, m->n);
     e |= arg_real(m, k, a++, m->dt);
     cl_mem trees[] = {m->wnode_box, m->wnode_kid, m->wnode_off, m->wtri_order};
     for (size_t i = 0; i < sizeof trees / sizeof trees[0]; i++)
-        e |= ARG(k, a++, trees[i]);
-    e |= ARG(k, a++, m->wall_cap);
-    e |= ARG(k, a++, m->nwall);
-    e |= ARG(k, a++, m->status);
-    e |= ARG(k, a++, m->iscr);
-    e |= ARG(k, a++, m->rscr);
-    e |= ARG(k, a++, m->ilen);
-    e |= ARG(k, a++, m->rlen);
-    e |= ARG(k, a++, m->pts_cap);
-    e |= ARG(k, a++, nwork);
-    e |= ARG(k, a++, m->travel);
+        e |= CL_ARG(k, a++, trees[i]);
+    e |= CL_ARG(k, a++, m->wall_cap);
+    e |= CL_ARG(k, a++, m->nwall);
+    e |= CL_ARG(k, a++, m->status);
+    e |= CL_ARG(k, a++, m->iscr);
+    e |= CL_ARG(k, a++, m->rscr);
+    e |= CL_ARG(k, a++, m->ilen);
+    e |= CL_ARG(k, a++, m->rlen);
+    e |= CL_ARG(k, a++, m->pts_cap);
+    e |= CL_ARG(k, a++, nwork);
+    e |= CL_ARG(k, a++, m->travel);
     /* surfaces' gaps (cp_mesh_gap) certified up to the skin, a list's reach */
     e |= arg_real(m, k, a++, m->skin);
     e |= arg_real(m, k, a++, m->list_life);
     cl_mem outs[] = {m->force, m->pairs.point, m->pairs.spring, m->pairs.kt, m->info};
     for (size_t i = 0; i < sizeof outs / sizeof outs[0]; i++)
-        e |= ARG(k, a++, outs[i]);
-    if (e != CL_SUCCESS) return arg_fail(err, "contact_forces");
+        e |= CL_ARG(k, a++, outs[i]);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "contact_forces");
     return cl_launch(m->dev, k, (size_t)nwork, "contact_forces", err);
 }
 
@@ -402,17 +395,17 @@ static int second_lists(sim *m, pd_error *err)
     cl_int e = clEnqueueFillBuffer(m->dev->queue, m->second_count, &zero, sizeof zero, 0,
                                    sizeof(int) * (size_t)n, 0, NULL, NULL);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clEnqueueFillBuffer", e);
-    e |= ARG(m->k_second_count, 0, m->pairs.keys);
-    e |= ARG(m->k_second_count, 1, np);
-    e |= ARG(m->k_second_count, 2, n);
-    e |= ARG(m->k_second_count, 3, m->second_count);
-    e |= ARG(m->k_second_fill, 0, m->pairs.keys);
-    e |= ARG(m->k_second_fill, 1, np);
-    e |= ARG(m->k_second_fill, 2, n);
-    e |= ARG(m->k_second_fill, 3, m->second_off);
-    e |= ARG(m->k_second_fill, 4, m->second_count);
-    e |= ARG(m->k_second_fill, 5, m->second_list);
-    if (e != CL_SUCCESS) return arg_fail(err, "second_count/second_fill");
+    e |= CL_ARG(m->k_second_count, 0, m->pairs.keys);
+    e |= CL_ARG(m->k_second_count, 1, np);
+    e |= CL_ARG(m->k_second_count, 2, n);
+    e |= CL_ARG(m->k_second_count, 3, m->second_count);
+    e |= CL_ARG(m->k_second_fill, 0, m->pairs.keys);
+    e |= CL_ARG(m->k_second_fill, 1, np);
+    e |= CL_ARG(m->k_second_fill, 2, n);
+    e |= CL_ARG(m->k_second_fill, 3, m->second_off);
+    e |= CL_ARG(m->k_second_fill, 4, m->second_count);
+    e |= CL_ARG(m->k_second_fill, 5, m->second_list);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "second_count/second_fill");
     rc = cl_launch(m->dev, m->k_second_count, (size_t)np, "second_count", err);
     if (rc == PD_OK) rc = dsort_scan(&m->sort, m->second_count, n, m->second_off, err);
     if (rc != PD_OK) return rc;
@@ -432,24 +425,24 @@ static int gather(sim *m, pd_error *err)
     cl_kernel k = m->k_body;
     cl_int e = CL_SUCCESS;
     int a = 0;
-    e |= ARG(k, a++, m->offset);
-    e |= ARG(k, a++, m->second_off);
-    e |= ARG(k, a++, m->second_list);
-    e |= ARG(k, a++, m->force);
-    e |= ARG(k, a++, m->pairs.point);
-    e |= ARG(k, a++, m->x);
-    e |= ARG(k, a++, m->n);
-    e |= ARG(k, a++, m->inv_m);
-    e |= ARG(k, a++, m->size);
-    e |= ARG(k, a++, m->v);
+    e |= CL_ARG(k, a++, m->offset);
+    e |= CL_ARG(k, a++, m->second_off);
+    e |= CL_ARG(k, a++, m->second_list);
+    e |= CL_ARG(k, a++, m->force);
+    e |= CL_ARG(k, a++, m->pairs.point);
+    e |= CL_ARG(k, a++, m->x);
+    e |= CL_ARG(k, a++, m->n);
+    e |= CL_ARG(k, a++, m->inv_m);
+    e |= CL_ARG(k, a++, m->size);
+    e |= CL_ARG(k, a++, m->v);
     for (int c = 0; c < 3; c++)
         e |= arg_real(m, k, a++, s->gravity[c]);
     e |= arg_real(m, k, a++, s->has_fluid ? s->fluid_viscosity : 0);
     for (int c = 0; c < 3; c++)
         e |= arg_real(m, k, a++, s->has_fluid ? s->fluid_velocity[c] : 0);
-    e |= ARG(k, a++, m->f);
-    e |= ARG(k, a++, m->t);
-    if (e != CL_SUCCESS) return arg_fail(err, "body_forces");
+    e |= CL_ARG(k, a++, m->f);
+    e |= CL_ARG(k, a++, m->t);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "body_forces");
     return cl_launch(m->dev, k, (size_t)m->n, "body_forces", err);
 }
 
@@ -468,14 +461,14 @@ static int kick(sim *m, pd_error *err)
 {
     cl_kernel k = m->k_kick;
     cl_int e = CL_SUCCESS;
-    e |= ARG(k, 0, m->v);
-    e |= ARG(k, 1, m->L);
-    e |= ARG(k, 2, m->f);
-    e |= ARG(k, 3, m->t);
-    e |= ARG(k, 4, m->inv_m);
-    e |= ARG(k, 5, m->n);
+    e |= CL_ARG(k, 0, m->v);
+    e |= CL_ARG(k, 1, m->L);
+    e |= CL_ARG(k, 2, m->f);
+    e |= CL_ARG(k, 3, m->t);
+    e |= CL_ARG(k, 4, m->inv_m);
+    e |= CL_ARG(k, 5, m->n);
     e |= arg_real(m, k, 6, 0.5 * m->dt);
-    if (e != CL_SUCCESS) return arg_fail(err, "integrate_kick");
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "integrate_kick");
     return cl_launch(m->dev, k, (size_t)m->n, "integrate_kick", err);
 }
 
@@ -486,23 +479,23 @@ int sim_step(sim *m, int *bad_particle, pd_error *err)
     double t0 = m->profile ? clock_now() : 0;
     int rc = kick(m, err);
     if (rc != PD_OK) return rc;
-    e |= ARG(k, 0, m->x);
-    e |= ARG(k, 1, m->v);
-    e |= ARG(k, 2, m->q);
-    e |= ARG(k, 3, m->L);
-    e |= ARG(k, 4, m->material);
-    e |= ARG(k, 5, m->n);
+    e |= CL_ARG(k, 0, m->x);
+    e |= CL_ARG(k, 1, m->v);
+    e |= CL_ARG(k, 2, m->q);
+    e |= CL_ARG(k, 3, m->L);
+    e |= CL_ARG(k, 4, m->material);
+    e |= CL_ARG(k, 5, m->n);
     e |= arg_real(m, k, 6, m->dt);
-    e |= ARG(k, 7, m->status);
-    e |= ARG(k, 8, m->x_ref);
+    e |= CL_ARG(k, 7, m->status);
+    e |= CL_ARG(k, 8, m->x_ref);
     e |= arg_real(m, k, 9, 0.25 * m->skin * m->skin);
-    e |= ARG(k, 10, m->size);
-    e |= ARG(k, 11, m->shape);
-    e |= ARG(k, 12, m->radius_ratio);
-    e |= ARG(k, 13, m->travel);
-    e |= ARG(k, 14, m->unit_inertia);
-    e |= ARG(k, 15, m->density);
-    if (e != CL_SUCCESS) return arg_fail(err, "integrate_drift");
+    e |= CL_ARG(k, 10, m->size);
+    e |= CL_ARG(k, 11, m->shape);
+    e |= CL_ARG(k, 12, m->radius_ratio);
+    e |= CL_ARG(k, 13, m->travel);
+    e |= CL_ARG(k, 14, m->unit_inertia);
+    e |= CL_ARG(k, 15, m->density);
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "integrate_drift");
     if ((rc = cl_launch(m->dev, k, (size_t)m->n, "integrate_drift", err)) != PD_OK) return rc;
     if (m->walls_move && (rc = sim_walls_at(m, (double)(m->step + 1) * m->dt, err)) != PD_OK)
         return rc;
