@@ -152,34 +152,116 @@ PD_FN void ovl_crossing_cusps(ovl_ctx *c, pd_v3 p, pd_v3 te, pd_v3 m, pd_v3 nf, 
     ovl_cusp(c, p, l, n_g, ng, !f_on_b);
 }
 
-PD_FN int ovl_vertex_in_b(ovl_ctx *c, int i)
+/*
+ * Emits the node of vertex v of A (side 0) or B (side 1), known to lie inside the other solid, the
+ * first time one of its triangles asks in this pass; later asks find it emitted.
+ */
+PD_FN void ovl_vertex_emit(ovl_ctx *c, int side, int v)
 {
-    int st = c->st_a[i];
-    if (!(st & OVL_V_TESTED)) {
-        st |= OVL_V_TESTED;
-        if (ovl_inside_b(c, i)) {
-            int idx = ovl_node(c, ovl_va(c, i));
-            if (OVL_PLACES_BUILD && c->places) ovl_node_key(c, idx, 2 * i, -1, 0, PD_R(0));
-            st |= OVL_V_INSIDE | (idx + 1) * OVL_V_NODE;
-        }
-        c->st_a[i] = st;
-    }
-    return (st & OVL_V_INSIDE) != 0;
+    PD_GLOBAL int *st = side ? c->st_b : c->st_a;
+    int s = st[v];
+    if (s & OVL_V_EMITTED) return;
+    int idx = ovl_node(c, side ? ovl_vb(c, v) : ovl_va(c, v));
+    if (OVL_PLACES_BUILD && c->places) ovl_node_key(c, idx, 2 * v + side, -1, 0, PD_R(0));
+    st[v] = s | OVL_V_EMITTED | (idx + 1) * OVL_V_NODE;
 }
 
-PD_FN int ovl_vertex_in_a(ovl_ctx *c, int j)
+/* Whether vertex v of side (0: A, 1: B) is outside the other solid by the filter alone: beyond
+ * the other's half-plane or outside the box where A n B lies (as ovl_inside_b / _a find first). */
+PD_FN int ovl_outside_known(const ovl_ctx *c, int side, int v)
 {
-    int st = c->st_b[j];
-    if (!(st & OVL_V_TESTED)) {
-        st |= OVL_V_TESTED;
-        if (ovl_inside_a(c, j)) {
-            int idx = ovl_node(c, ovl_vb(c, j));
-            if (OVL_PLACES_BUILD && c->places) ovl_node_key(c, idx, 2 * j + 1, -1, 0, PD_R(0));
-            st |= OVL_V_INSIDE | (idx + 1) * OVL_V_NODE;
+    if (!c->filter) return 0;
+    if (side) return c->proj_b[v] > c->e1 || !ovl_in_box(c, ovl_vb(c, v));
+    if (c->in->flags & OVL_OPEN_B) return 0; /* A is not filtered against a wall */
+    return c->proj_a[v] < c->e2 || !ovl_in_box(c, ovl_va(c, v));
+}
+
+/* Settles the side of corner j from its neighbour i along an edge crossed `odd` times (mod 2),
+ * when i is known and j is not; returns 1 when it did. */
+PD_FN int ovl_spread(PD_GLOBAL int *st, int i, int j, int odd)
+{
+    if (!(st[i] & OVL_V_TESTED) || (st[j] & OVL_V_TESTED)) return 0;
+    st[j] |= OVL_V_TESTED | (((st[i] & OVL_V_INSIDE) != 0) != odd) * OVL_V_INSIDE;
+    return 1;
+}
+
+/*
+ * The side of the other solid of every corner of side's near triangles (st: TESTED, and INSIDE
+ * inside), with as few ray casts as can be. A corner beyond the other's half-plane or outside the
+ * box where A n B lies is outside (ovl_outside_known). Any other corner takes its side from a
+ * neighbour along an edge of a near triangle: the two differ exactly when the edge crosses the
+ * other solid's surface an odd number of times, and the pair loop has counted those crossings
+ * (x: a crossing point lies on both solids, so in both kept boxes, and the two triangles it lies
+ * on are near and their boxes meet; with the symbolic perturbation the crossings and the casts
+ * describe one configuration). A corner that no known one reaches is cast (ovl_inside_b / _a)
+ * and spread from in turn.
+ *
+ * Between particles the unknown corners are the few near the overlap, each an edge or two from a
+ * known one: sweeps over the near triangles' edges settle them. Where the filter knows nothing
+ * (a particle against a wall, or no filter), one cast settles the whole connected part, walked
+ * through the vertex -> triangle tables.
+ */
+PD_FN void ovl_resolve(ovl_ctx *c, int side)
+{
+    PD_GLOBAL const int *tri = side ? c->in->tb : c->in->ta;
+    PD_GLOBAL const int *near = side ? c->near_b : c->near_a;
+    PD_GLOBAL const int *x = side ? c->xb : c->xa;
+    PD_GLOBAL const int *slot = side ? c->slot_b : c->slot_a;
+    PD_GLOBAL const int *vt_off = side ? c->in->vt_b_off : c->in->vt_a_off;
+    PD_GLOBAL const int *vt = side ? c->in->vt_b : c->in->vt_a;
+    PD_GLOBAL int *st = side ? c->st_b : c->st_a;
+    int n = side ? c->nb : c->na, unknown = 0;
+    for (int k = 0; k < n; k++)
+        for (int q = 0; q < 3; q++) {
+            int v = tri[3 * near[k] + q];
+            if (st[v] & OVL_V_TESTED) continue;
+            if (ovl_outside_known(c, side, v))
+                st[v] |= OVL_V_TESTED;
+            else
+                unknown = 1;
         }
-        c->st_b[j] = st;
+    int walk = vt_off && !(c->filter && (side || !(c->in->flags & OVL_OPEN_B)));
+    int scan = 0; /* the near corners before this one are known */
+    while (unknown) {
+        if (!walk) {
+            /* sweeps until one settles nothing or leaves nothing unknown */
+            for (int changed = 1; changed && unknown;) {
+                changed = unknown = 0;
+                for (int k = 0; k < n; k++)
+                    for (int q = 0; q < 3; q++) {
+                        int i = tri[3 * near[k] + q], j = tri[3 * near[k] + (q + 1) % 3];
+                        int odd = (x[k] >> q) & 1;
+                        changed |= ovl_spread(st, i, j, odd) | ovl_spread(st, j, i, odd);
+                        unknown |= !(st[i] & OVL_V_TESTED);
+                    }
+            }
+            if (!unknown) return;
+        }
+        /* the first corner still unknown, cast */
+        for (; scan < 3 * n && (st[tri[3 * near[scan / 3] + scan % 3]] & OVL_V_TESTED); scan++)
+            ;
+        if (scan == 3 * n) return;
+        int v = tri[3 * near[scan / 3] + scan % 3];
+        int in = side ? ovl_inside_a(c, v) : ovl_inside_b(c, v);
+        st[v] |= OVL_V_TESTED | in * OVL_V_INSIDE;
+        if (walk) { /* everything this cast reaches through near triangles, breadth first */
+            PD_GLOBAL int *queue = c->queue;
+            int head = 0, tail = 0;
+            queue[tail++] = v;
+            while (head < tail) {
+                int u = queue[head++];
+                for (int e = vt_off[u]; e < vt_off[u + 1]; e++) {
+                    int t = vt[e], k = slot[t];
+                    /* slot holds places only for near triangles (others: any value) */
+                    if (k < 0 || k >= n || near[k] != t) continue;
+                    int q = tri[3 * t] == u ? 0 : tri[3 * t + 1] == u ? 1 : 2;
+                    int j1 = tri[3 * t + (q + 1) % 3], j2 = tri[3 * t + (q + 2) % 3];
+                    if (ovl_spread(st, u, j1, (x[k] >> q) & 1)) queue[tail++] = j1;
+                    if (ovl_spread(st, u, j2, (x[k] >> ((q + 2) % 3)) & 1)) queue[tail++] = j2;
+                }
+            }
+        }
     }
-    return (st & OVL_V_INSIDE) != 0;
 }
 
 /*
@@ -189,6 +271,7 @@ PD_FN int ovl_vertex_in_a(ovl_ctx *c, int j)
  */
 typedef struct ovl_tri {
     int id[3];
+    int slot; /* its place in near_a / near_b (ovl_pass) */
     pd_v3 p[3];
     pd_v3 nraw;   /* (p1 - p0) x (p2 - p0) */
     pd_real ptol; /* snap bound of sides of its plane (ovl_plane_tol); set by the pair loop */
@@ -398,6 +481,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         if (in != 1) continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
+        c->xa[T->slot] ^= 1 << k; /* for ovl_resolve */
         first = ovl_crossing_node(c, T, k, lo, p, qa, sa[k1], 0, first);
         pd_v3 te = v3_scale(T->e[k], (pd_real)-sa[k1]); /* into U's solid; sa is +-1 */
         ovl_crossing_cusps(c, p, te, T->m[k], T->nu, U->nu, 0);
@@ -421,6 +505,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         if (in != 1) continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
+        c->xb[U->slot] ^= 1 << k;
         first = ovl_crossing_node(c, U, k, lo, p, qb, sb[k1], 1, first);
         pd_v3 te = v3_scale(U->e[k], (pd_real)-sb[k1]);
         ovl_crossing_cusps(c, p, te, U->m[k], U->nu, T->nu, 1);
@@ -447,22 +532,20 @@ PD_FN void ovl_pass(ovl_ctx *c)
         for (int q = 0; q < 3; q++)
             c->st_b[tb[3 * c->kept_b[l] + q]] &= OVL_V_READY;
 
+    for (int k = 0; k < c->na; k++)
+        c->xa[k] = 0;
+    for (int l = 0; l < c->nb; l++)
+        c->xb[l] = 0;
+
+    /* the crossings: edges of one solid through faces of the other */
     for (int k = 0; k < c->na; k++) {
         int t = c->near_a[k];
         ovl_tri T;
         T.id[0] = ta[3 * t];
         T.id[1] = ta[3 * t + 1];
         T.id[2] = ta[3 * t + 2];
+        T.slot = k;
         ovl_tri_make(&T, ovl_va(c, T.id[0]), ovl_va(c, T.id[1]), ovl_va(c, T.id[2]), c->pad);
-        /* nodes of A inside B: two cusps per corner, along the triangle's two edges */
-        for (int q = 0; q < 3; q++) {
-            if (!ovl_vertex_in_b(c, T.id[q])) continue;
-            int qp = (q + 2) % 3;
-            ovl_tri_full(&T);
-            if (OVL_PLACES_BUILD && c->rec) ovl_cusps_of(c, c->st_a[T.id[q]] / OVL_V_NODE - 1);
-            ovl_cusp(c, T.p[q], T.e[q], T.m[q], T.nu, 0);
-            ovl_cusp(c, T.p[q], v3_scale(T.e[qp], PD_R(-1)), T.m[qp], T.nu, 0);
-        }
         /* B open (a wall's part): A is not filtered, so most of its triangles lie beside all
          * of B's near ones; between particles the box where the kept parts meet did that */
         if (open_b && !ovl_boxes_meet(T.lo, T.hi, c->nblo, c->nbhi)) continue;
@@ -502,26 +585,37 @@ PD_FN void ovl_pass(ovl_ctx *c)
             U.id[0] = tb[3 * u];
             U.id[1] = tb[3 * u + 1];
             U.id[2] = tb[3 * u + 2];
+            U.slot = l;
             ovl_tri_cached(&U, c, uc);
             ovl_pair(c, &T, &U);
         }
     }
-    for (int l = 0; l < c->nb; l++) {
-        int u = c->near_b[l];
-        int id[3] = {tb[3 * u], tb[3 * u + 1], tb[3 * u + 2]};
-        int any = 0;
-        for (int q = 0; q < 3; q++)
-            any |= ovl_vertex_in_a(c, id[q]);
-        if (!any) continue;
-        ovl_tri U;
-        ovl_tri_make(&U, ovl_vb(c, id[0]), ovl_vb(c, id[1]), ovl_vb(c, id[2]), c->pad);
-        ovl_tri_full(&U);
-        for (int q = 0; q < 3; q++) {
-            if (!(c->st_b[id[q]] & OVL_V_INSIDE)) continue;
-            int qp = (q + 2) % 3;
-            if (OVL_PLACES_BUILD && c->rec) ovl_cusps_of(c, c->st_b[id[q]] / OVL_V_NODE - 1);
-            ovl_cusp(c, U.p[q], U.e[q], U.m[q], U.nu, 1);
-            ovl_cusp(c, U.p[q], v3_scale(U.e[qp], PD_R(-1)), U.m[qp], U.nu, 1);
+    /* nodes of each solid inside the other: two cusps per corner, along the triangle's two
+     * edges (A's, then B's) */
+    for (int side = 0; side < 2; side++) {
+        PD_GLOBAL const int *tri = side ? tb : ta;
+        PD_GLOBAL const int *near = side ? c->near_b : c->near_a;
+        PD_GLOBAL const int *st = side ? c->st_b : c->st_a;
+        int n = side ? c->nb : c->na;
+        ovl_resolve(c, side);
+        for (int k = 0; k < n; k++) {
+            int t = near[k];
+            int id[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
+            if (!((st[id[0]] | st[id[1]] | st[id[2]]) & OVL_V_INSIDE)) continue;
+            ovl_tri V;
+            if (side)
+                ovl_tri_make(&V, ovl_vb(c, id[0]), ovl_vb(c, id[1]), ovl_vb(c, id[2]), c->pad);
+            else
+                ovl_tri_make(&V, ovl_va(c, id[0]), ovl_va(c, id[1]), ovl_va(c, id[2]), c->pad);
+            ovl_tri_full(&V);
+            for (int q = 0; q < 3; q++) {
+                if (!(st[id[q]] & OVL_V_INSIDE)) continue;
+                int qp = (q + 2) % 3;
+                ovl_vertex_emit(c, side, id[q]);
+                if (OVL_PLACES_BUILD && c->rec) ovl_cusps_of(c, st[id[q]] / OVL_V_NODE - 1);
+                ovl_cusp(c, V.p[q], V.e[q], V.m[q], V.nu, side);
+                ovl_cusp(c, V.p[q], v3_scale(V.e[qp], PD_R(-1)), V.m[qp], V.nu, side);
+            }
         }
     }
 }
@@ -869,6 +963,11 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->strip_a.ord = c->hits + in->ntb;
     c->strip_b.ord = c->strip_a.ord + in->nta;
     c->sweep_ord = c->strip_b.ord + in->ntb;
+    c->xa = c->sweep_ord + in->ntb;
+    c->xb = c->xa + in->nta;
+    c->slot_a = c->xb + in->ntb;
+    c->slot_b = c->slot_a + in->nta;
+    c->queue = c->slot_b + in->ntb;
     c->strip_a.built = c->strip_b.built = 0; /* built by the first cast that needs one */
     c->strip_a.eu = c->strip_b.eu = v3(0, 0, 0);
     c->strip_a.width = c->strip_b.width = PD_R(0);
@@ -1091,6 +1190,10 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         uc[18] = ovl_plane_tol(c, v3_norm(U.nraw));
         c->near_b[c->nb++] = u;
     }
+    for (int k = 0; k < c->na; k++) /* for ovl_resolve */
+        c->slot_a[c->near_a[k]] = k;
+    for (int l = 0; l < c->nb; l++)
+        c->slot_b[c->near_b[l]] = l;
     if (c->filter && c->nb >= OVL_STRIP_MIN) {
         /* the pair loop's sweep (ovl_ctx), across the contact */
         int a = ovl_least_axis(d);

@@ -130,7 +130,9 @@ typedef struct ovl_out {
 
 PD_FN int ovl_iscratch_len(int nta, int ntb, int nva, int nvb)
 {
-    return 3 * (nta + ntb) + nva + nvb + 2 * ntb;
+    /* kept, near, xa / xb, slot, strip ord: 5 per triangle; st and queue: 2 per vertex; hits
+     * and sweep_ord: 2 per triangle of B */
+    return 5 * (nta + ntb) + 2 * (nva + nvb) + 2 * ntb;
 }
 PD_FN int ovl_rscratch_len(int nta, int ntb, int nva, int nvb, int pts_cap)
 {
@@ -159,10 +161,11 @@ PD_FN int ovl_places_rlen(int pts_cap)
 }
 
 /* Vertex state bits (per pass). */
-#define OVL_V_READY 1  /* B only: transformed into A's frame */
-#define OVL_V_TESTED 2 /* inside test done in this pass */
-#define OVL_V_INSIDE 4 /* inside the other polyhedron */
-#define OVL_V_NODE 8   /* bits from here: 1 + the index of the vertex's node in this pass */
+#define OVL_V_READY 1   /* B only: transformed into A's frame */
+#define OVL_V_TESTED 2  /* side of the other solid known in this pass (ovl_resolve) */
+#define OVL_V_INSIDE 4  /* inside the other polyhedron */
+#define OVL_V_EMITTED 8 /* its node emitted in this pass (ovl_vertex_emit) */
+#define OVL_V_NODE 16   /* bits from here: 1 + the index of the vertex's node in this pass */
 
 /*
  * One solid's kept triangles in order along eu, a direction across d, for the ray casts: every ray
@@ -193,8 +196,16 @@ typedef struct ovl_ctx {
     int ka, kb; /* triangles kept by the half-plane filter: the ray casts' candidates */
     int na, nb; /* of those, the ones meeting the box where A n B can lie: the pair loop's */
     PD_GLOBAL int *kept_a, *kept_b, *near_a, *near_b, *st_a, *st_b;
-    PD_GLOBAL int *hits;  /* ovl_pass: the near triangles of B whose boxes meet the current T's */
-    pd_v3 box_lo, box_hi; /* box of A's kept part n box of B's kept part, padded */
+    PD_GLOBAL int *hits; /* ovl_pass: the near triangles of B whose boxes meet the current T's */
+    /*
+     * ovl_pass's crossings, per near triangle of A (xa) and of B (xb): bit k is the parity of
+     * the other solid's faces that the triangle's edge k (corner k to k + 1) crosses. With them a
+     * vertex's side of the other solid follows from a neighbour's (ovl_resolve), where it took a
+     * ray cast. slot_a / slot_b: a triangle's place in near_a / near_b (valid where near lists
+     * it back), queue: ovl_resolve's work list.
+     */
+    PD_GLOBAL int *xa, *xb, *slot_a, *slot_b, *queue;
+    pd_v3 box_lo, box_hi;     /* box of A's kept part n box of B's kept part, padded */
     pd_v3 alo, ahi, blo, bhi; /* boxes of A's and B's kept parts, padded */
     pd_v3 nblo, nbhi;         /* box of B's near triangles (the pair loop's), padded */
     int origin_in_b;          /* OVL_OPEN_B: A's centroid inside the wall; -1 not yet known */
