@@ -161,19 +161,9 @@ PD_FN void ovl_vertex_emit(ovl_ctx *c, int side, int v)
     PD_GLOBAL int *st = side ? c->st_b : c->st_a;
     int s = st[v];
     if (s & OVL_V_EMITTED) return;
-    int idx = ovl_node(c, side ? ovl_vb(c, v) : ovl_va(c, v));
+    int idx = ovl_node(c, ovl_vx(c, side, v));
     if (OVL_PLACES_BUILD && c->places) ovl_node_key(c, idx, 2 * v + side, -1, 0, PD_R(0));
     st[v] = s | OVL_V_EMITTED | (idx + 1) * OVL_V_NODE;
-}
-
-/* Whether vertex v of side (0: A, 1: B) is outside the other solid by the filter alone: beyond
- * the other's half-plane or outside the box where A n B lies (as ovl_inside_b / _a find first). */
-PD_FN int ovl_outside_known(const ovl_ctx *c, int side, int v)
-{
-    if (!c->filter) return 0;
-    if (side) return c->proj_b[v] > c->e1 || !ovl_in_box(c, ovl_vb(c, v));
-    if (c->in->flags & OVL_OPEN_B) return 0; /* A is not filtered against a wall */
-    return c->proj_a[v] < c->e2 || !ovl_in_box(c, ovl_va(c, v));
 }
 
 /* Settles the side of corner j from its neighbour i along an edge crossed `odd` times (mod 2),
@@ -603,10 +593,8 @@ PD_FN void ovl_pass(ovl_ctx *c)
             int id[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
             if (!((st[id[0]] | st[id[1]] | st[id[2]]) & OVL_V_INSIDE)) continue;
             ovl_tri V;
-            if (side)
-                ovl_tri_make(&V, ovl_vb(c, id[0]), ovl_vb(c, id[1]), ovl_vb(c, id[2]), c->pad);
-            else
-                ovl_tri_make(&V, ovl_va(c, id[0]), ovl_va(c, id[1]), ovl_va(c, id[2]), c->pad);
+            ovl_tri_make(&V, ovl_vx(c, side, id[0]), ovl_vx(c, side, id[1]), ovl_vx(c, side, id[2]),
+                         c->pad);
             ovl_tri_full(&V);
             for (int q = 0; q < 3; q++) {
                 if (!(st[id[q]] & OVL_V_INSIDE)) continue;

@@ -331,6 +331,11 @@ PD_FN pd_v3 ovl_vb(const ovl_ctx *c, int j)
 {
     return v3_load(c->vbt, j);
 }
+/* Vertex v of A (side 0) or B (side 1), in A's frame. */
+PD_FN pd_v3 ovl_vx(const ovl_ctx *c, int side, int v)
+{
+    return v3_load(side ? c->vbt : c->vat, v);
+}
 
 /*
  * Orientation of A's edge a0->a1 against B's edge b0->b1, both canonical (lower index first):
@@ -702,25 +707,30 @@ PD_FN int ovl_open_inside_b(ovl_ctx *c, pd_v3 p)
     return odd;
 }
 
-/* Point-in-B test for A's vertex i. */
+/* Whether vertex v of side (0: A, 1: B) is outside the other solid by the filter alone: beyond
+ * the other's half-plane or outside the box where A n B lies. */
+PD_FN int ovl_outside_known(const ovl_ctx *c, int side, int v)
+{
+    if (!c->filter) return 0;
+    if (side) return c->proj_b[v] > c->e1 || !ovl_in_box(c, ovl_vb(c, v));
+    if (c->in->flags & OVL_OPEN_B) return 0; /* A is not filtered against a wall */
+    return c->proj_a[v] < c->e2 || !ovl_in_box(c, ovl_va(c, v));
+}
+
+/* Point-in-B test for A's vertex i, one that ovl_outside_known did not place. */
 PD_FN int ovl_inside_b(ovl_ctx *c, int i)
 {
     pd_v3 p = ovl_va(c, i);
     if (c->in->flags & OVL_OPEN_B) return ovl_open_inside_b(c, p);
-    if (c->filter && c->proj_a[i] < c->e2) return 0; /* below B's half-plane: outside */
-    if (c->filter && !ovl_in_box(c, p)) return 0;    /* outside the box where A n B lies */
     return ovl_ray_parity(c, p, c->in->tb, c->kept_b, c->kb, c->vbt, PD_R(-1), c->blo, c->bhi,
                           &c->strip_b);
 }
 
-/* Point-in-A test for B's vertex j. */
+/* Point-in-A test for B's vertex j, one that ovl_outside_known did not place. */
 PD_FN int ovl_inside_a(ovl_ctx *c, int j)
 {
-    pd_v3 u = ovl_vb(c, j);
-    if (c->filter && c->proj_b[j] > c->e1) return 0; /* above A's half-plane: outside */
-    if (c->filter && !ovl_in_box(c, u)) return 0;
-    return ovl_ray_parity(c, u, c->in->ta, c->kept_a, c->ka, c->vat, PD_R(1), c->alo, c->ahi,
-                          &c->strip_a);
+    return ovl_ray_parity(c, ovl_vb(c, j), c->in->ta, c->kept_a, c->ka, c->vat, PD_R(1), c->alo,
+                          c->ahi, &c->strip_a);
 }
 
 #endif /* PD_OVERLAP_PREDICATES_H */
