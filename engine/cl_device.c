@@ -416,7 +416,7 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &cap);
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[7]);
     if (args_e != CL_SUCCESS) {
-        rc = pd_error_set(err, PD_ECL, "opencl: setting overlap_pairs arguments failed");
+        rc = CL_ARG_FAIL(err, "overlap_pairs");
         goto done;
     }
     size_t global = (size_t)npairs;
@@ -584,8 +584,7 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
                                 NULL, NULL);
     clReleaseMemObject(bout);
     if (ae != CL_SUCCESS || e != CL_SUCCESS) {
-        rc = ae != CL_SUCCESS ? pd_error_set(err, PD_ECL, "opencl: narrow_phase arguments")
-                              : CL_FAIL(err, "narrow_phase", e);
+        rc = ae != CL_SUCCESS ? CL_ARG_FAIL(err, "narrow_phase") : CL_FAIL(err, "narrow_phase", e);
         goto done;
     }
     for (size_t i = 0; i < OVL_RESULT_LEN * (size_t)npairs; i++)

@@ -90,7 +90,7 @@ int dsort_scan(dsort *s, cl_mem in, int n, cl_mem out, pd_error *err)
     e |= CL_ARG(s->k_apply, 3, nwork);
     e |= CL_ARG(s->k_apply, 4, s->part);
     e |= CL_ARG(s->k_apply, 5, out);
-    if (e != CL_SUCCESS) return pd_error_set(err, PD_ECL, "opencl: scan arguments");
+    if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "scan_partial, scan_top and scan_apply");
     int rc = cl_launch(s->dev, s->k_partial, (size_t)nwork, "scan_partial", err);
     if (rc == PD_OK) rc = cl_launch(s->dev, s->k_top, 1, "scan_top", err);
     if (rc == PD_OK) rc = cl_launch(s->dev, s->k_apply, (size_t)nwork, "scan_apply", err);
@@ -137,7 +137,7 @@ int dsort_radix(dsort *s, cl_mem *key, cl_mem *val, cl_mem *key_tmp, cl_mem *val
         e |= CL_ARG(s->k_scatter, 6, s->first);
         e |= CL_ARG(s->k_scatter, 7, *key_tmp);
         e |= CL_ARG(s->k_scatter, 8, *val_tmp);
-        if (e != CL_SUCCESS) return pd_error_set(err, PD_ECL, "opencl: radix sort arguments");
+        if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "radix_count and radix_scatter");
         int rc = cl_launch(dev, s->k_count, (size_t)nwork, "radix_count", err);
         if (rc == PD_OK) rc = dsort_scan(s, s->count, (int)need, s->first, err);
         if (rc == PD_OK) rc = cl_launch(dev, s->k_scatter, (size_t)nwork, "radix_scatter", err);
