@@ -175,6 +175,87 @@ PD_FN int ovl_spread(PD_GLOBAL int *st, int i, int j, int odd)
     return 1;
 }
 
+/* One side's near triangles, their crossing parities and vertex states, as ovl_resolve walks
+ * them (side 0: A's, 1: B's). */
+typedef struct ovl_walk {
+    PD_GLOBAL const int *tri, *near, *x, *slot, *vt_off, *vt;
+    PD_GLOBAL int *st;
+    int n;
+} ovl_walk;
+
+PD_FN void ovl_walk_make(ovl_walk *w, const ovl_ctx *c, int side)
+{
+    w->tri = side ? c->in->tb : c->in->ta;
+    w->near = side ? c->near_b : c->near_a;
+    w->x = side ? c->xb : c->xa;
+    w->slot = side ? c->slot_b : c->slot_a;
+    w->vt_off = side ? c->in->vt_b_off : c->in->vt_a_off;
+    w->vt = side ? c->in->vt_b : c->in->vt_a;
+    w->st = side ? c->st_b : c->st_a;
+    w->n = side ? c->nb : c->na;
+}
+
+/* The place of triangle t in w's near list, or -1 when it is not near (slot holds places only
+ * for near triangles; others: any value). */
+PD_FN int ovl_walk_slot(const ovl_walk *w, int t)
+{
+    int k = w->slot[t];
+    return k >= 0 && k < w->n && w->near[k] == t ? k : -1;
+}
+
+/* Settles unknown corner u from a known neighbour along an edge of a near triangle at u (found
+ * through the vertex -> triangle tables); returns 1 when it did. */
+PD_FN int ovl_pull(const ovl_walk *w, int u)
+{
+    for (int e = w->vt_off[u]; e < w->vt_off[u + 1]; e++) {
+        int t = w->vt[e], k = ovl_walk_slot(w, t);
+        if (k < 0) continue;
+        PD_GLOBAL const int *v = w->tri + 3 * t;
+        int q = v[0] == u ? 0 : v[1] == u ? 1 : 2;
+        /* edge q runs u -> v[q + 1], edge q + 2 runs v[q + 2] -> u */
+        if (ovl_spread(w->st, v[(q + 1) % 3], u, (w->x[k] >> q) & 1) ||
+            ovl_spread(w->st, v[(q + 2) % 3], u, (w->x[k] >> ((q + 2) % 3)) & 1))
+            return 1;
+    }
+    return 0;
+}
+
+/* Spreads known corner v's side to everything it reaches through near triangles, breadth first
+ * (queue: room for each corner once). */
+PD_FN void ovl_walk_from(const ovl_walk *w, int v, PD_GLOBAL int *queue)
+{
+    int head = 0, tail = 0;
+    queue[tail++] = v;
+    while (head < tail) {
+        int u = queue[head++];
+        for (int e = w->vt_off[u]; e < w->vt_off[u + 1]; e++) {
+            int t = w->vt[e], k = ovl_walk_slot(w, t);
+            if (k < 0) continue;
+            PD_GLOBAL const int *p = w->tri + 3 * t;
+            int q = p[0] == u ? 0 : p[1] == u ? 1 : 2;
+            int j1 = p[(q + 1) % 3], j2 = p[(q + 2) % 3];
+            if (ovl_spread(w->st, u, j1, (w->x[k] >> q) & 1)) queue[tail++] = j1;
+            if (ovl_spread(w->st, u, j2, (w->x[k] >> ((q + 2) % 3)) & 1)) queue[tail++] = j2;
+        }
+    }
+}
+
+/* Without vertex -> triangle tables: sweeps over the near triangles' edges, each corner settled
+ * from a known neighbour, until one settles nothing or leaves nothing unknown. */
+PD_FN void ovl_sweeps(const ovl_walk *w)
+{
+    for (int changed = 1, unknown = 1; changed && unknown;) {
+        changed = unknown = 0;
+        for (int k = 0; k < w->n; k++)
+            for (int q = 0; q < 3; q++) {
+                int i = w->tri[3 * w->near[k] + q], j = w->tri[3 * w->near[k] + (q + 1) % 3];
+                int odd = (w->x[k] >> q) & 1;
+                changed |= ovl_spread(w->st, i, j, odd) | ovl_spread(w->st, j, i, odd);
+                unknown |= !(w->st[i] & OVL_V_TESTED);
+            }
+    }
+}
+
 /*
  * The side of the other solid of every corner of side's near triangles (st: TESTED, and INSIDE
  * inside), with as few ray casts as can be. A corner beyond the other's half-plane or outside the
@@ -187,70 +268,61 @@ PD_FN int ovl_spread(PD_GLOBAL int *st, int i, int j, int odd)
  * and spread from in turn.
  *
  * Between particles the unknown corners are the few near the overlap, each an edge or two from a
- * known one: sweeps over the near triangles' edges settle them. Where the filter knows nothing
- * (a particle against a wall, or no filter), one cast settles the whole connected part, walked
- * through the vertex -> triangle tables.
+ * known one: they are listed, and each takes its side from a known neighbour, found through the
+ * vertex -> triangle tables, until none can (sweeps over every near triangle's edges when there
+ * are no tables, as for a wall's triangles). Where the filter knows nothing (a particle against a
+ * wall, or no filter), one cast settles the whole connected part, walked through the tables.
  */
 PD_FN void ovl_resolve(ovl_ctx *c, int side)
 {
-    PD_GLOBAL const int *tri = side ? c->in->tb : c->in->ta;
-    PD_GLOBAL const int *near = side ? c->near_b : c->near_a;
-    PD_GLOBAL const int *x = side ? c->xb : c->xa;
-    PD_GLOBAL const int *slot = side ? c->slot_b : c->slot_a;
-    PD_GLOBAL const int *vt_off = side ? c->in->vt_b_off : c->in->vt_a_off;
-    PD_GLOBAL const int *vt = side ? c->in->vt_b : c->in->vt_a;
-    PD_GLOBAL int *st = side ? c->st_b : c->st_a;
-    int n = side ? c->nb : c->na, unknown = 0;
-    for (int k = 0; k < n; k++)
+    ovl_walk w;
+    ovl_walk_make(&w, c, side);
+    PD_GLOBAL int *st = w.st;
+    /* the unknown corners, each once, in the order of the near triangles; the walk's queue
+     * after them (each holds a corner at most once) */
+    PD_GLOBAL int *list = c->queue, *queue = c->queue + (side ? c->in->nvb : c->in->nva);
+    int m = 0;
+    for (int k = 0; k < w.n; k++)
         for (int q = 0; q < 3; q++) {
-            int v = tri[3 * near[k] + q];
-            if (st[v] & OVL_V_TESTED) continue;
-            if (ovl_outside_known(c, side, v))
+            int v = w.tri[3 * w.near[k] + q];
+            if (st[v] & (OVL_V_TESTED | OVL_V_LISTED)) continue;
+            if (ovl_outside_known(c, side, v)) {
                 st[v] |= OVL_V_TESTED;
-            else
-                unknown = 1;
-        }
-    int walk = vt_off && !(c->filter && (side || !(c->in->flags & OVL_OPEN_B)));
-    int scan = 0; /* the near corners before this one are known */
-    while (unknown) {
-        if (!walk) {
-            /* sweeps until one settles nothing or leaves nothing unknown */
-            for (int changed = 1; changed && unknown;) {
-                changed = unknown = 0;
-                for (int k = 0; k < n; k++)
-                    for (int q = 0; q < 3; q++) {
-                        int i = tri[3 * near[k] + q], j = tri[3 * near[k] + (q + 1) % 3];
-                        int odd = (x[k] >> q) & 1;
-                        changed |= ovl_spread(st, i, j, odd) | ovl_spread(st, j, i, odd);
-                        unknown |= !(st[i] & OVL_V_TESTED);
-                    }
+            } else {
+                st[v] |= OVL_V_LISTED;
+                list[m++] = v;
             }
-            if (!unknown) return;
         }
+    if (m == 0) return;
+    int walk = w.vt_off && !(c->filter && (side || !(c->in->flags & OVL_OPEN_B)));
+    if (!walk && w.vt_off) {
+        /* rounds over the list until one settles nothing or leaves nothing unknown */
+        for (int changed = 1; changed && m > 0;) {
+            int left = 0;
+            changed = 0;
+            for (int i = 0; i < m; i++) {
+                int u = list[i];
+                if (st[u] & OVL_V_TESTED) continue;
+                if (ovl_pull(&w, u))
+                    changed = 1;
+                else
+                    list[left++] = u;
+            }
+            m = left;
+        }
+    } else if (!walk) {
+        ovl_sweeps(&w);
+    }
+    for (int i = 0; i < m; i++) {
+        int v = list[i];
+        if (st[v] & OVL_V_TESTED) continue;
         /* the first corner still unknown, cast */
-        for (; scan < 3 * n && (st[tri[3 * near[scan / 3] + scan % 3]] & OVL_V_TESTED); scan++)
-            ;
-        if (scan == 3 * n) return;
-        int v = tri[3 * near[scan / 3] + scan % 3];
         int in = side ? ovl_inside_a(c, v) : ovl_inside_b(c, v);
         st[v] |= OVL_V_TESTED | in * OVL_V_INSIDE;
-        if (walk) { /* everything this cast reaches through near triangles, breadth first */
-            PD_GLOBAL int *queue = c->queue;
-            int head = 0, tail = 0;
-            queue[tail++] = v;
-            while (head < tail) {
-                int u = queue[head++];
-                for (int e = vt_off[u]; e < vt_off[u + 1]; e++) {
-                    int t = vt[e], k = slot[t];
-                    /* slot holds places only for near triangles (others: any value) */
-                    if (k < 0 || k >= n || near[k] != t) continue;
-                    int q = tri[3 * t] == u ? 0 : tri[3 * t + 1] == u ? 1 : 2;
-                    int j1 = tri[3 * t + (q + 1) % 3], j2 = tri[3 * t + (q + 2) % 3];
-                    if (ovl_spread(st, u, j1, (x[k] >> q) & 1)) queue[tail++] = j1;
-                    if (ovl_spread(st, u, j2, (x[k] >> ((q + 2) % 3)) & 1)) queue[tail++] = j2;
-                }
-            }
-        }
+        if (w.vt_off)
+            ovl_walk_from(&w, v, queue); /* everything this cast reaches */
+        else
+            ovl_sweeps(&w);
     }
 }
 

@@ -130,9 +130,9 @@ typedef struct ovl_out {
 
 PD_FN int ovl_iscratch_len(int nta, int ntb, int nva, int nvb)
 {
-    /* kept, near, xa / xb, slot, strip ord: 5 per triangle; st and queue: 2 per vertex; hits
-     * and sweep_ord: 2 per triangle of B */
-    return 5 * (nta + ntb) + 2 * (nva + nvb) + 2 * ntb;
+    /* kept, near, xa / xb, slot, strip ord: 5 per triangle; st, and ovl_resolve's list and
+     * queue (one side at a time): 3 per vertex; hits and sweep_ord: 2 per triangle of B */
+    return 5 * (nta + ntb) + 3 * (nva + nvb) + 2 * ntb;
 }
 PD_FN int ovl_rscratch_len(int nta, int ntb, int nva, int nvb, int pts_cap)
 {
@@ -165,7 +165,8 @@ PD_FN int ovl_places_rlen(int pts_cap)
 #define OVL_V_TESTED 2  /* side of the other solid known in this pass (ovl_resolve) */
 #define OVL_V_INSIDE 4  /* inside the other polyhedron */
 #define OVL_V_EMITTED 8 /* its node emitted in this pass (ovl_vertex_emit) */
-#define OVL_V_NODE 16   /* bits from here: 1 + the index of the vertex's node in this pass */
+#define OVL_V_LISTED 16 /* on ovl_resolve's list of corners whose side is not yet known */
+#define OVL_V_NODE 32   /* bits from here: 1 + the index of the vertex's node in this pass */
 
 /*
  * One solid's kept triangles in order along eu, a direction across d, for the ray casts: every ray
@@ -202,7 +203,7 @@ typedef struct ovl_ctx {
      * the other solid's faces that the triangle's edge k (corner k to k + 1) crosses. With them a
      * vertex's side of the other solid follows from a neighbour's (ovl_resolve), where it took a
      * ray cast. slot_a / slot_b: a triangle's place in near_a / near_b (valid where near lists
-     * it back), queue: ovl_resolve's work list.
+     * it back), queue: ovl_resolve's list of unknown corners and its walk's queue.
      */
     PD_GLOBAL int *xa, *xb, *slot_a, *slot_b, *queue;
     pd_v3 box_lo, box_hi;     /* box of A's kept part n box of B's kept part, padded */
