@@ -195,12 +195,23 @@ PD_FN void ovl_walk_make(ovl_walk *w, const ovl_ctx *c, int side)
     w->n = side ? c->nb : c->na;
 }
 
-/* The place of triangle t in w's near list, or -1 when it is not near (slot holds places only
- * for near triangles; others: any value). */
-PD_FN int ovl_walk_slot(const ovl_walk *w, int t)
+/*
+ * Corner u's neighbours along the two edges at u of triangle t, and for each the parity of the
+ * edge's crossings with the other surface; 0 when t is not near (slot holds places only for near
+ * triangles; others: any value).
+ */
+PD_FN int ovl_walk_edges(const ovl_walk *w, int t, int u, int nb[2], int odd[2])
 {
     int k = w->slot[t];
-    return k >= 0 && k < w->n && w->near[k] == t ? k : -1;
+    if (k < 0 || k >= w->n || w->near[k] != t) return 0;
+    PD_GLOBAL const int *v = w->tri + 3 * t;
+    int q = v[0] == u ? 0 : v[1] == u ? 1 : 2;
+    /* edge q runs u -> v[q + 1], edge q + 2 runs v[q + 2] -> u */
+    nb[0] = v[(q + 1) % 3];
+    nb[1] = v[(q + 2) % 3];
+    odd[0] = (w->x[k] >> q) & 1;
+    odd[1] = (w->x[k] >> ((q + 2) % 3)) & 1;
+    return 1;
 }
 
 /* Settles unknown corner u from a known neighbour along an edge of a near triangle at u (found
@@ -208,13 +219,9 @@ PD_FN int ovl_walk_slot(const ovl_walk *w, int t)
 PD_FN int ovl_pull(const ovl_walk *w, int u)
 {
     for (int e = w->vt_off[u]; e < w->vt_off[u + 1]; e++) {
-        int t = w->vt[e], k = ovl_walk_slot(w, t);
-        if (k < 0) continue;
-        PD_GLOBAL const int *v = w->tri + 3 * t;
-        int q = v[0] == u ? 0 : v[1] == u ? 1 : 2;
-        /* edge q runs u -> v[q + 1], edge q + 2 runs v[q + 2] -> u */
-        if (ovl_spread(w->st, v[(q + 1) % 3], u, (w->x[k] >> q) & 1) ||
-            ovl_spread(w->st, v[(q + 2) % 3], u, (w->x[k] >> ((q + 2) % 3)) & 1))
+        int nb[2], odd[2];
+        if (ovl_walk_edges(w, w->vt[e], u, nb, odd) &&
+            (ovl_spread(w->st, nb[0], u, odd[0]) || ovl_spread(w->st, nb[1], u, odd[1])))
             return 1;
     }
     return 0;
@@ -229,13 +236,10 @@ PD_FN void ovl_walk_from(const ovl_walk *w, int v, PD_GLOBAL int *queue)
     while (head < tail) {
         int u = queue[head++];
         for (int e = w->vt_off[u]; e < w->vt_off[u + 1]; e++) {
-            int t = w->vt[e], k = ovl_walk_slot(w, t);
-            if (k < 0) continue;
-            PD_GLOBAL const int *p = w->tri + 3 * t;
-            int q = p[0] == u ? 0 : p[1] == u ? 1 : 2;
-            int j1 = p[(q + 1) % 3], j2 = p[(q + 2) % 3];
-            if (ovl_spread(w->st, u, j1, (w->x[k] >> q) & 1)) queue[tail++] = j1;
-            if (ovl_spread(w->st, u, j2, (w->x[k] >> ((q + 2) % 3)) & 1)) queue[tail++] = j2;
+            int nb[2], odd[2];
+            if (!ovl_walk_edges(w, w->vt[e], u, nb, odd)) continue;
+            for (int h = 0; h < 2; h++)
+                if (ovl_spread(w->st, u, nb[h], odd[h])) queue[tail++] = nb[h];
         }
     }
 }
