@@ -47,7 +47,8 @@ static const char *usage_text =
     "  run SCENARIO.json -o OUT.h5 [--device N] [--quiet] [--meshes]\n"
     "      runs a scenario on an OpenCL device (default: the first GPU, else the first\n"
     "      device); writes the HDF5 result and OUT.h5.xmf for ParaView (--meshes adds every\n"
-    "      particle's surface per frame); a progress bar on a terminal; Ctrl-C cancels\n"
+    "      particle's surface per frame); a progress bar on a terminal; Ctrl-C cancels,\n"
+    "      keeping the frames so far (root attribute status = \"cancelled\")\n"
     "  devices [--json]\n"
     "      the OpenCL devices; N is what --device N takes\n"
     "\n"
@@ -441,6 +442,11 @@ static int cmd_run(int argc, char **argv)
                    fin.frames, fin.contacts, fin.kinetic_energy);
     } else {
         fprintf(stderr, "polydem: %s: %s\n", file, err.msg);
+        if (fin.result_kept)
+            fprintf(stderr,
+                    "polydem: %s: kept the %lld frames written before the stop (the run reached "
+                    "t = %.6g s of %.6g s); its root attribute status says \"%s\"\n",
+                    out, fin.frames, fin.sim_time, fin.sim_duration, pd_run_status(rc));
     }
     pd_device_close(dev);
     pd_scenario_destroy(sc);

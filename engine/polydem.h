@@ -266,6 +266,10 @@ typedef struct pd_progress {
     double kinetic_energy; /* J, translational + rotational, at the last stats step */
     double wall_seconds;   /* since the run started */
     long long frames;      /* output frames written so far */
+    /* At the end of a run that stopped early (cancelled, diverged, a device error): 1 when its
+     * frames so far were kept in the output file, whose root attribute status then says why
+     * ("cancelled", "diverged" or "failed"); 0 when there was nothing to keep. */
+    int result_kept;
 } pd_progress;
 
 /*
@@ -281,7 +285,8 @@ typedef struct pd_run_options {
     void *user;               /* passed to progress */
     double progress_interval; /* wall seconds between callbacks; <= 0 means 0.5 */
     /* Set non-zero from any thread to stop the run at the end of the current step; pd_run then
-     * returns PD_ECANCELLED and removes the partial result. May be NULL. */
+     * returns PD_ECANCELLED and keeps the frames written so far (pd_progress.result_kept). May
+     * be NULL. */
     volatile int *cancel;
     int shape_meshes; /* also write every particle's world-space mesh per frame for ParaView */
 } pd_run_options;
@@ -291,10 +296,16 @@ typedef struct pd_run_options {
  * PD_EDIVERGED (NaN or runaway energy: the message names the step and particle), PD_EINVAL (a
  * scenario the device cannot run, e.g. double precision without cl_khr_fp64, or dt above the
  * stable estimate without allow_unstable_dt), PD_EIO, PD_ENOMEM or PD_ECL. final (may be NULL)
- * receives the last progress record whatever the outcome. A device runs one scenario at a time.
+ * receives the last progress record whatever the outcome. A run that stops after its first frame
+ * keeps the frames so far in output_path, marked by the root attribute status (final's
+ * result_kept); before that, no file is left. A device runs one scenario at a time.
  */
 int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_progress *final,
            pd_error *err);
+
+/* The result file's root attribute status for pd_run's return code: "complete" (PD_OK),
+ * "cancelled", "diverged", or "failed" (any other error). */
+const char *pd_run_status(int rc);
 
 /* The scenario's name and its JSON text as submitted. */
 const char *pd_scenario_name(const pd_scenario *s);

@@ -815,15 +815,30 @@ int rh5_create(const char *path, const char *scenario_json, int double_precision
     return PD_OK;
 }
 
+long long rh5_frames(const rh5_writer *w)
+{
+    return w ? w->nframes : 0;
+}
+
 int rh5_close(rh5_writer *w, pd_error *err)
 {
-    if (!w) return pd_error_set(err, PD_EINVAL, "rh5_close: no writer");
+    return rh5_finish(w, "complete", NULL, err);
+}
+
+int rh5_finish(rh5_writer *w, const char *status, const char *message, pd_error *err)
+{
+    if (!w) return pd_error_set(err, PD_EINVAL, "rh5_finish: no writer");
     quiet();
     int rc = PD_OK;
     if (w->broken)
         rc = pd_error_set(err, PD_EIO, "%s: result discarded: an earlier write failed", w->path);
     else if (w->n == 0)
         rc = pd_error_set(err, PD_EINVAL, "%s: result discarded: no particles were set", w->path);
+    else if (!status || !status[0])
+        rc = pd_error_set(err, PD_EINVAL, "%s: result discarded: no status given", w->path);
+    else if (put_str(w->file, "status", status) < 0 ||
+             (message && put_str(w->file, "status_message", message) < 0))
+        rc = h5fail(w, err, "cannot write the root attribute 'status'");
     if (close_file(w) < 0 && rc == PD_OK) rc = h5fail(w, err, "cannot close '%s'", w->partial);
 
     size_t len = strlen(w->path);

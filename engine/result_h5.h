@@ -7,7 +7,9 @@
  *
  *   /               attrs format, format_version (int), scenario (JSON text), precision
  *                   ("single"|"double": what the run computed in; data are always stored as
- *                   double), dt (double, s)
+ *                   double), dt (double, s), status ("complete"; "cancelled", "diverged" or
+ *                   "failed" when the run stopped early and its frames so far were kept, with
+ *                   status_message saying why; a file without status predates it: complete)
  *   /shapes/<name>/ vertices (nv,3) double [1], triangles (nt,3) int32; attrs volume (double,
  *                   [1]), kind ("mesh"|"sphere"), index (int, position in the shapes' order)
  *   /particles/     shape (N) int32, material (N) int32, size (N) double [m], mass (N) double
@@ -40,9 +42,11 @@
  *
  * Lifecycle: rh5_create -> rh5_add_shape / rh5_add_wall (any number, any order) ->
  * rh5_set_particles (once; ends the setup, creates /frames and /stats) -> rh5_write_frame /
- * rh5_write_stats (any number, interleaved) -> rh5_close (success) or rh5_abort (failed or
- * cancelled job). The file is written as "<path>.partial" and renamed to path by rh5_close, so a
- * half-written file is never mistaken for a result; rh5_close also writes "<path>.xmf".
+ * rh5_write_stats (any number, interleaved) -> rh5_close (success), rh5_finish (a run stopped
+ * early whose frames are kept, marked by the root attribute status) or rh5_abort (nothing worth
+ * keeping). The file is written as "<path>.partial" and renamed to path by rh5_close or
+ * rh5_finish, so a half-written file is never mistaken for a result; both also write
+ * "<path>.xmf".
  *
  * After a failed write the writer refuses further writes and rh5_close discards the file: a
  * result with datasets of unequal length would mislead a reader.
@@ -116,9 +120,19 @@ int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_e
 /*
  * Closes the file, writes "<path>.xmf" (through a temporary name), renames "<path>.partial" to
  * path, and frees the writer. On failure the partial file is removed. The writer is freed
- * whatever the outcome; w may not be used afterwards.
+ * whatever the outcome; w may not be used afterwards. The root attribute status is "complete".
  */
 int rh5_close(rh5_writer *w, pd_error *err);
+
+/*
+ * rh5_close for a run that stopped before its end (cancelled, diverged, or failed on the device)
+ * but whose frames so far are sound: the root attributes status (e.g. "cancelled") and, when
+ * message is not NULL, status_message (why it stopped) tell a reader that the frames end early.
+ */
+int rh5_finish(rh5_writer *w, const char *status, const char *message, pd_error *err);
+
+/* Frames written so far (0 for NULL). */
+long long rh5_frames(const rh5_writer *w);
 
 /* Closes and removes the partial file and frees the writer (failed or cancelled jobs). Accepts
  * NULL. */

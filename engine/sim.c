@@ -138,6 +138,14 @@ static double energy_bound(const sim *m, double ke0)
     return 10 * (ke0 + mass * g * ext + 0.5 * mass * 4 * vw * vw) + 1e-300;
 }
 
+const char *pd_run_status(int rc)
+{
+    return rc == PD_OK           ? "complete"
+           : rc == PD_ECANCELLED ? "cancelled"
+           : rc == PD_EDIVERGED  ? "diverged"
+                                 : "failed";
+}
+
 int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_progress *final,
            pd_error *err)
 {
@@ -262,6 +270,14 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
     rc = rh5_close(w, err);
     w = NULL;
 done:
+    if (w && rc != PD_OK && rh5_frames(w) > 0) {
+        /* Stopped early (cancelled, diverged, a device error): the frames written so far are
+         * sound (a divergence is caught before its frame is written), and a user who stops a
+         * long run wants them. The file says so in its root attribute status. */
+        pd_error ferr = {0};
+        pr.result_kept = rh5_finish(w, pd_run_status(rc), err ? err->msg : NULL, &ferr) == PD_OK;
+        w = NULL;
+    }
     if (w) rh5_abort(w);
     pr.wall_seconds = now_seconds() - t_start;
     if (final) *final = pr;

@@ -1,4 +1,4 @@
-/* api_results.c - a succeeded job's result file, its XDMF, and data read from it. */
+/* api_results.c - a finished job's result file, its XDMF, and data read from it. */
 #include "api.h"
 
 #include "result_read.h"
@@ -9,8 +9,9 @@
 #include <string.h>
 
 /*
- * Finds job id; when it has succeeded, 0 with its result file in path. Otherwise queues 404 or
- * 409 (and *ret) and returns 1; *running tells whether the job is running (may be NULL).
+ * Finds job id; when it has a result (it succeeded, or stopped early with its frames so far kept:
+ * the file's root attribute status says which), 0 with its result file in path. Otherwise queues
+ * 404 or 409 (and *ret) and returns 1; *running tells whether the job is running (may be NULL).
  */
 static int result_of(http_req *r, const char *id, char *path, size_t cap, int *running,
                      enum MHD_Result *ret)
@@ -26,11 +27,11 @@ static int result_of(http_req *r, const char *id, char *path, size_t cap, int *r
         *ret = http_error(r, 500, "database", "the job database failed (see the server log)");
         return 1;
     }
-    int ok = !strcmp(j.status, "succeeded") && j.result;
+    int queued = !strcmp(j.status, "queued"), run = !strcmp(j.status, "running");
+    int ok = !queued && !run && j.result; /* a requeued job's old path is not kept */
     if (ok) {
         snprintf(path, cap, "%s/%s", r->app->cfg->data, j.result);
     } else {
-        int queued = !strcmp(j.status, "queued"), run = !strcmp(j.status, "running");
         if (running) *running = run;
         if (!running || !run)
             *ret = http_error(r, 409, "result_not_ready",

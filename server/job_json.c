@@ -28,12 +28,12 @@ json_t *job_json(const job_rec *j)
     json_t *tags = json_loads(j->tags, 0, NULL);
     json_t *progress = j->progress ? json_loads(j->progress, 0, NULL) : json_null();
     json_t *o =
-        json_pack("{s:s, s:s, s:o, s:o, s:I, s:s, s:o, s:o, s:o, s:o}", "id", j->id, "status",
+        json_pack("{s:s, s:s, s:o, s:o, s:I, s:s, s:o, s:o, s:o, s:o, s:b}", "id", j->id, "status",
                   j->status, "name", j->name ? str_or_null(j->name) : json_string(""), "tags",
                   tags ? tags : json_array(), "priority", (json_int_t)j->priority, "created_at",
                   j->created_at, "started_at", str_or_null(j->started_at), "finished_at",
                   str_or_null(j->finished_at), "error", str_or_null(j->error), "progress",
-                  progress ? progress : json_null());
+                  progress ? progress : json_null(), "result_available", j->result != NULL);
     return o;
 }
 

@@ -147,14 +147,22 @@ static void run_job(worker *w, const job_rec *j, const char *scenario)
         job_store_finish(w->st, j->id, "succeeded", NULL, rel, final_json);
         fprintf(stderr, "polydemd: job %s succeeded in %.1f s\n", j->id, wall);
     } else if (rc == PD_ECANCELLED && stopping && !user_cancel) {
+        /* it runs again from the start: the frames kept from this try are not its result */
+        if (fin.result_kept) {
+            char xmf[sizeof out + 8];
+            snprintf(xmf, sizeof xmf, "%s.xmf", out);
+            remove(out);
+            remove(xmf);
+        }
         job_store_requeue(w->st, j->id);
         fprintf(stderr, "polydemd: job %s stopped by shutdown, queued again\n", j->id);
     } else if (rc == PD_ECANCELLED) {
-        job_store_finish(w->st, j->id, "cancelled", "cancelled while running", NULL, final_json);
+        job_store_finish(w->st, j->id, "cancelled", "cancelled while running",
+                         fin.result_kept ? rel : NULL, final_json);
         fprintf(stderr, "polydemd: job %s cancelled after %.1f s\n", j->id, wall);
     } else {
-        job_store_finish(w->st, j->id, "failed", err.msg[0] ? err.msg : "run failed", NULL,
-                         final_json);
+        job_store_finish(w->st, j->id, "failed", err.msg[0] ? err.msg : "run failed",
+                         fin.result_kept ? rel : NULL, final_json);
         fprintf(stderr, "polydemd: job %s failed: %s\n", j->id, err.msg);
     }
     free(final_json);

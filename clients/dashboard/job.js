@@ -43,11 +43,13 @@ function renderJob() {
   $('job-facts').replaceChildren(...kv.map(([k, v]) => el('div', {}, el('dt', {}, k), el('dd', {}, v))));
   $('job-error').hidden = !job.error;
   $('job-error').textContent = job.error ? `error: ${job.error}` : '';
-  const done = job.status === 'succeeded';
+  // a job cancelled or failed while running may keep its frames so far (result_available)
+  const done = job.status === 'succeeded' || job.result_available === true;
   for (const [a, route] of [['dl-result', '/result'], ['dl-xmf', '/result.xmf']]) {
     $(a).href = done ? jobPath(id, route) : '#';
     $(a).classList.toggle('disabled', !done);
-    $(a).title = done ? '' : 'available when the job has succeeded';
+    $(a).title = done ? (job.status === 'succeeded' ? '' : `the frames written before the job was ${job.status}`)
+      : 'available when the job has succeeded';
   }
   $('cancel').hidden = FINISHED.includes(job.status);
   $('delete').hidden = !FINISHED.includes(job.status);
@@ -90,7 +92,7 @@ function onJob(j) {
   }
   if (was !== j.status && FINISHED.includes(j.status)) {
     loadStats();
-    if (j.status === 'succeeded') loadViewer();
+    if (j.status === 'succeeded' || j.result_available === true) loadViewer();
   }
 }
 
@@ -320,7 +322,7 @@ async function init() {
     if (d > 0) for (const p of Object.values(plots)) p.xMax = d;
   }
   loadStats();
-  if (job.status === 'succeeded') loadViewer();
+  if (job.status === 'succeeded' || job.result_available === true) loadViewer();
   else if (!FINISHED.includes(job.status)) {
     $('viewer-note').textContent = 'Frames are shown when the job has finished.';
     watchJob(job, onJob);

@@ -103,6 +103,24 @@ else bad stage_times_per_row "$(cat "$tmp/why")"; fi
 $POLYDEM run "$tmp/drop.json" -o "$tmp/q.h5" --quiet >"$tmp/out" 2>&1
 if [ $? -eq 0 ] && [ ! -s "$tmp/out" ] && [ -f "$tmp/q.h5" ]; then ok run_quiet; else bad run_quiet "$(cat "$tmp/out")"; fi
 
+# Ctrl-C (SIGINT) stops a long run: exit 130, a message saying what was kept, and the frames so
+# far in the result, whose root attribute status says "cancelled"
+sed 's/"duration": 0.02/"duration": 1000/' "$tmp/drop.json" >"$tmp/long.json"
+$POLYDEM run "$tmp/long.json" -o "$tmp/long.h5" >"$tmp/out" 2>"$tmp/err" &
+pid=$!
+i=0
+while [ ! -e "$tmp/long.h5.partial" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
+sleep 1
+kill -INT "$pid"
+wait "$pid"
+rc=$?
+st=$(h5dump -a /status "$tmp/long.h5" 2>&1 | sed -n 's/^ *(0): "\(.*\)"$/\1/p')
+nf=$(h5dump -H -d /frames/time "$tmp/long.h5" 2>&1 | sed -n 's/.*SIMPLE { ( \([0-9]*\) ).*/\1/p')
+if [ "$rc" -eq 130 ] && [ "$st" = cancelled ] && [ "${nf:-0}" -ge 1 ] && [ -f "$tmp/long.h5.xmf" ] &&
+    [ ! -e "$tmp/long.h5.partial" ] && grep -q "kept the $nf frames" "$tmp/err"; then
+    ok ctrl_c_keeps_frames
+else bad ctrl_c_keeps_frames "exit $rc, status '$st', $nf frames: $(cat "$tmp/err")"; fi
+
 # bad input: a message naming the flag, file or field; 2 for usage, 1 for a scenario or run
 expect_fail no_output 2 "-o" -- $POLYDEM run "$tmp/drop.json"
 expect_fail no_scenario 2 "scenario file" -- $POLYDEM run -o "$tmp/x.h5"

@@ -3,6 +3,8 @@
  * builds a small scenario, steps it on the first OpenCL device (PoCL in CI) and compares with
  * theory. Tolerances are stated where they are used, with where they come from.
  */
+#include <hdf5.h>
+#include <math.h>
 #include <stdio.h>
 #include <string.h>
 #include <unistd.h>
@@ -1072,8 +1074,53 @@ static int cancel_at_once(const pd_progress *p, void *user)
     return 1;
 }
 
+/*
+ * A result kept from a run that stopped early: its root attribute status (into status, cap
+ * bytes), its frame count, and whether every kept position is finite. 0 when it could be read.
+ */
+static int stopped_result(const char *path, char *status, size_t cap, long long *frames,
+                          int *finite)
+{
+    int rc = -1;
+    status[0] = 0;
+    *frames = 0;
+    *finite = 0;
+    hid_t f = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT);
+    if (f < 0) return -1;
+    hid_t a = H5Aopen(f, "status", H5P_DEFAULT);
+    hid_t t = a >= 0 ? H5Aget_type(a) : -1;
+    char *v = NULL;
+    if (t >= 0 && H5Aread(a, t, &v) >= 0 && v) {
+        snprintf(status, cap, "%s", v);
+        H5free_memory(v);
+    }
+    hid_t d = H5Dopen2(f, "/frames/position", H5P_DEFAULT);
+    hid_t sp = d >= 0 ? H5Dget_space(d) : -1;
+    hsize_t dims[3] = {0, 0, 0};
+    if (sp >= 0 && H5Sget_simple_extent_ndims(sp) == 3 &&
+        H5Sget_simple_extent_dims(sp, dims, NULL) == 3) {
+        size_t n = (size_t)(dims[0] * dims[1] * dims[2]);
+        double *x = malloc(sizeof *x * (n ? n : 1));
+        if (x && H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, x) >= 0) {
+            *frames = (long long)dims[0];
+            *finite = 1;
+            for (size_t i = 0; i < n; i++)
+                *finite &= isfinite(x[i]) != 0;
+            rc = 0;
+        }
+        free(x);
+    }
+    if (sp >= 0) H5Sclose(sp);
+    if (d >= 0) H5Dclose(d);
+    if (t >= 0) H5Tclose(t);
+    if (a >= 0) H5Aclose(a);
+    H5Fclose(f);
+    return rc;
+}
+
 /* A time step far above the stable estimate, forced with allow_unstable_dt, must stop with a
- * message naming the step and a particle, and leave no result file behind. */
+ * message naming the step and a particle; the frames written before it are kept (each finite,
+ * the divergence being caught before its frame), the file saying "diverged". */
 TEST(divergence_is_reported)
 {
     char json[3000];
@@ -1097,9 +1144,17 @@ TEST(divergence_is_reported)
     printf("  %s\n", err.msg);
     CHECK_EQ_INT(PD_EDIVERGED, rc);
     CHECK(strstr(err.msg, "step") && strstr(err.msg, "particle"));
-    CHECK(!file_exists(out));
+    char status[32];
+    long long frames;
+    int finite;
+    CHECK(fin.result_kept == 1);
+    CHECK(stopped_result(out, status, sizeof status, &frames, &finite) == 0);
+    CHECK(!strcmp(status, "diverged"));
+    CHECK(frames >= 1 && frames == fin.frames && finite);
+    CHECK(file_exists("/tmp/polydem_test_diverge.h5.xmf"));
     CHECK(!file_exists("/tmp/polydem_test_diverge.h5.partial"));
-    /* cancelling from the progress callback stops the run and removes the partial file too */
+    remove(out);
+    /* cancelling from the progress callback stops the run and keeps its frames too */
     p = strstr(json, "9e-3");
     memcpy(p, "2e-6", 4);
     pd_scenario_destroy(s);
@@ -1108,7 +1163,13 @@ TEST(divergence_is_reported)
         opt.progress = cancel_at_once;
         rc = pd_run(dev, s, &opt, &fin, &err);
         CHECK_EQ_INT(PD_ECANCELLED, rc);
-        CHECK(!file_exists(out) && !file_exists("/tmp/polydem_test_diverge.h5.partial"));
+        CHECK(fin.result_kept == 1);
+        CHECK(stopped_result(out, status, sizeof status, &frames, &finite) == 0);
+        CHECK(!strcmp(status, "cancelled"));
+        CHECK(frames >= 1 && frames == fin.frames && finite);
+        CHECK(!file_exists("/tmp/polydem_test_diverge.h5.partial"));
+        remove(out);
+        remove("/tmp/polydem_test_diverge.h5.xmf");
     }
     pd_diags_free(&d);
     pd_scenario_destroy(s);

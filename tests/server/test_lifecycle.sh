@@ -1,7 +1,8 @@
 #!/bin/sh
 # test_lifecycle.sh - jobs across cancellation, shutdown and crashes, against the real engine:
 # cancelling a running job stops it within seconds while its event stream shows progress and
-# then the cancellation; SIGTERM during a run exits 0 and the job runs again after the restart,
+# then the cancellation, and serves its frames so far (root attribute status "cancelled");
+# SIGTERM during a run exits 0, keeps no file, and the job runs again after the restart,
 # after a higher-priority job and before a later one of equal priority; after kill -9 the
 # restarted daemon queues the interrupted job again, serves no half-written result, and the
 # job succeeds. tests/server/long_job.json runs about 5 s (2026-11-30, 2 cores): the cancel must
@@ -68,9 +69,16 @@ prog = [e for e in ev if e["event"] == "progress"]
 steps = [e["data"]["progress"]["step"] for e in prog]
 print(str(len(prog) >= 2 and steps == sorted(steps) and ev[-1]["event"] == "status"
           and ev[-1]["data"]["status"] == "cancelled").lower())' "$tmp/l1.sse")"
-code=$(req GET "/v1/jobs/$l1/result")
-check cancelled_has_no_result 409 "$code"
-check cancelled_leaves_no_file 0 "$(ls "$data/results" | grep -c "^$l1")"
+# the frames written before the cancel are kept and served, the file saying it stopped early
+code=$(req GET "/v1/jobs/$l1")
+check cancelled_result_available "200 true" "$code $(jget "$tmp/body" 'd["result_available"]')"
+code=$(curl -s -o "$tmp/l1.h5" -w '%{http_code}' "$URL/v1/jobs/$l1/result")
+check cancelled_result_200 200 "$code"
+check cancelled_result_status cancelled "$(h5dump -a /status "$tmp/l1.h5" 2>&1 | sed -n 's/^ *(0): "\(.*\)"$/\1/p')"
+check cancelled_result_frames true "$(h5dump -H -d /frames/time "$tmp/l1.h5" 2>&1 | grep -q 'SIMPLE { ( [1-9][0-9]* )' && echo true)"
+check cancelled_leaves_no_partial 0 "$(ls "$data/results" | grep -c "^$l1.*partial")"
+code=$(req GET "/v1/jobs/$l1/frames/0")
+check cancelled_frame_0_200 200 "$code"
 
 # ---- SIGTERM while a job runs: exit 0, the job is queued again and re-runs after a restart
 l2=$(submit tests/server/long_job.json)
@@ -79,6 +87,8 @@ low=$(submit "$tmp/quick.json")
 high=$(submit "$tmp/high.json")
 stop_daemon TERM && ok sigterm_during_run_exit_0
 check sigterm_requeues_job true "$(grep -q "job $l2 stopped by shutdown, queued again" "$LOG" && echo true)"
+# it runs again from the start: the frames of the stopped try are not kept
+check sigterm_leaves_no_file 0 "$(ls "$data/results" | grep -c "^$l2")"
 start_daemon "$data" --no-selftest --config "$tmp/fast.conf" || { summary; exit 1; }
 check requeued_job_succeeds succeeded "$(wait_status "$l2" succeeded 60)"
 check low_priority_job_succeeds succeeded "$(wait_status "$low" succeeded 30)"
