@@ -371,7 +371,7 @@ class Client:
                 job = jobs[job_id]
                 status = job.get("status", "?")
                 if status in ("failed", "cancelled"):
-                    log("job %s %s%s" % (job_id, status, ": %s" % job["error"] if job.get("error") else ""))
+                    log(unfinished(job))
                 if status == "succeeded":
                     try:
                         ke, contacts, force = summarize(self.stats(job_id))
@@ -380,6 +380,18 @@ class Client:
             rows.append([job_id] + texts + [status, ke, contacts, force])
         self.last_sweep_timed_out = timed_out
         return sweep_id, rows
+
+
+def unfinished(job):
+    """One line on a job that did not succeed: its status, its error, and whether the frames it
+    wrote before it stopped can still be downloaded (result_available; the file's root attribute
+    status then says "cancelled", "diverged" or "failed")."""
+    text = "job %s %s" % (job.get("id"), job.get("status"))
+    if job.get("error"):
+        text += ": %s" % job["error"]
+    if job.get("result_available") and job.get("status") in ("failed", "cancelled"):
+        text += "; the frames it wrote before it stopped can be downloaded (download %s)" % job.get("id")
+    return text
 
 
 def load_scenario(path):
@@ -477,15 +489,13 @@ def main(argv=None):
                 return 0
             job = c.wait(job["id"], timeout=a.timeout, progress=progress_printer())
             if job.get("status") != "succeeded":
-                return fail(1, "job %s %s%s" % (job["id"], job.get("status"),
-                                                ": %s" % job["error"] if job.get("error") else ""))
+                return fail(1, unfinished(job))
             return 0
         if a.cmd == "wait":
             jobs = c.wait(a.job_id, poll=a.poll, timeout=a.timeout, progress=progress_printer())
             bad = [j for j in jobs.values() if j.get("status") != "succeeded"]
             for j in bad:
-                fail(1, "job %s %s%s" % (j["id"], j.get("status"),
-                                         ": %s" % j["error"] if j.get("error") else ""))
+                fail(1, unfinished(j))
             return 1 if bad else 0
         if a.cmd == "download":
             out = a.output or a.job_id + (".xmf" if a.xmf else ".h5")

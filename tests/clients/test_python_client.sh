@@ -105,6 +105,25 @@ if start_daemon; then
     rc=$?
     if [ "$rc" = 0 ] && curl -s "$URL/v1/jobs/$id/scenario" | jq -e '.shapes.r.mesh | startswith("sha256:")' >/dev/null; then
         ok mesh_file_uploaded; else bad mesh_file_uploaded "exit $rc: $(tail -n 3 "$tmp/err")"; fi
+    # a job cancelled while running: wait fails (exit 1) but says its frames so far can be
+    # downloaded, and they download, the file's root attribute status saying "cancelled"
+    id=$(timeout 30 python3 -B "$CLIENT" --server "$URL" submit tests/server/long_job.json 2>"$tmp/err")
+    i=0
+    while [ "$(curl -s "$URL/v1/jobs/$id" | jq -r '.progress.frames // 0')" -lt 1 ] && [ $i -lt 300 ]; do
+        sleep 0.1
+        i=$((i + 1))
+    done
+    curl -s -o /dev/null -X POST "$URL/v1/jobs/$id/cancel"
+    timeout 60 python3 -B "$CLIENT" --server "$URL" --timeout 30 wait "$id" 2>"$tmp/err"
+    rc=$?
+    if [ "$rc" = 1 ] && grep -q "job $id cancelled.*can be downloaded" "$tmp/err"; then ok cancelled_wait_says_frames_kept; else
+        bad cancelled_wait_says_frames_kept "expected exit 1 saying the frames can be downloaded, got $rc: $(tail -n 2 "$tmp/err")"; fi
+    timeout 60 python3 -B "$CLIENT" --server "$URL" download "$id" -o "$tmp/cancelled.h5" 2>"$tmp/err"
+    check cancelled_download_exit_status 0 "$?"
+    if command -v h5dump >/dev/null 2>&1; then
+        check cancelled_download_status cancelled \
+            "$(h5dump -a /status "$tmp/cancelled.h5" 2>&1 | sed -n 's/^ *(0): "\(.*\)"$/\1/p')"
+    fi
     jq '.interactions[0].friction = -1' "$tmp/quick.json" >"$tmp/invalid.json"
     timeout 30 python3 -B "$CLIENT" --server "$URL" --timeout 120 submit "$tmp/invalid.json" >/dev/null 2>"$tmp/err"
     rc=$?
