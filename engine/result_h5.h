@@ -48,8 +48,8 @@
  * rh5_finish, so a half-written file is never mistaken for a result; both also write
  * "<path>.xmf".
  *
- * After a failed write the writer refuses further writes and rh5_close discards the file: a
- * result with datasets of unequal length would mislead a reader.
+ * After a failed write the writer refuses further writes and rh5_close (or rh5_finish) discards
+ * the file: a result with datasets of unequal length would mislead a reader.
  *
  * A writer is used from one thread at a time; different writers may live in different threads
  * (Debian's HDF5 is built thread-safe and serialises its calls).

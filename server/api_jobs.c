@@ -10,7 +10,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
-#include <unistd.h>
 
 /* ---- submissions: the body of POST /v1/jobs and POST /v1/scenarios/validate ---------------- */
 
@@ -472,12 +471,6 @@ enum MHD_Result api_job_cancel(http_req *r, const char *id)
     return ret;
 }
 
-static void remove_file(const char *path)
-{
-    if (unlink(path) != 0 && errno != ENOENT)
-        fprintf(stderr, "polydemd: cannot remove '%s': %s\n", path, strerror(errno));
-}
-
 enum MHD_Result api_job_delete(http_req *r, const char *id)
 {
     char *result = NULL;
@@ -488,12 +481,7 @@ enum MHD_Result api_job_delete(http_req *r, const char *id)
         return http_error(r, 409, "job_active",
                           "job '%s' is queued or running: cancel it before deleting it", id);
     if (rc != JS_OK) return db_error(r);
-    static const char *const suffix[] = {".h5", ".h5.xmf", ".h5.partial"};
-    for (int i = 0; i < 3; i++) {
-        char path[4400];
-        snprintf(path, sizeof path, "%s/%s%s", r->app->results_dir, id, suffix[i]);
-        remove_file(path);
-    }
+    util_remove_job_files(r->app->results_dir, id);
     fprintf(stderr, "polydemd: job %s deleted\n", id);
     char data[64];
     snprintf(data, sizeof data, "{\"id\":\"%s\"}", id);

@@ -74,6 +74,17 @@ int util_mkdir_p(const char *path)
     return 0;
 }
 
+void util_remove_job_files(const char *results_dir, const char *id)
+{
+    static const char *const suffix[] = {".h5", ".h5.xmf", ".h5.partial"};
+    for (int i = 0; i < 3; i++) {
+        char path[4400];
+        snprintf(path, sizeof path, "%s/%s%s", results_dir, id, suffix[i]);
+        if (unlink(path) != 0 && errno != ENOENT)
+            fprintf(stderr, "polydemd: cannot remove '%s': %s\n", path, strerror(errno));
+    }
+}
+
 char *util_read_file(const char *path, size_t *len)
 {
     FILE *f = fopen(path, "rb");

@@ -20,6 +20,10 @@ int util_mkdir_p(const char *path);
 /* Reads a whole file into a NUL-terminated malloc'd buffer; NULL with errno set on failure. */
 char *util_read_file(const char *path, size_t *len);
 
+/* Removes job id's result files in results_dir (<id>.h5, <id>.h5.xmf, <id>.h5.partial). A file
+ * that is not there is fine; any other failure is logged. */
+void util_remove_job_files(const char *results_dir, const char *id);
+
 /* snprintf that reports truncation: 0, or -1 when the result did not fit. */
 int util_fmt(char *buf, size_t cap, const char *fmt, ...)
 #if defined(__GNUC__)

@@ -148,12 +148,7 @@ static void run_job(worker *w, const job_rec *j, const char *scenario)
         fprintf(stderr, "polydemd: job %s succeeded in %.1f s\n", j->id, wall);
     } else if (rc == PD_ECANCELLED && stopping && !user_cancel) {
         /* it runs again from the start: the frames kept from this try are not its result */
-        if (fin.result_kept) {
-            char xmf[sizeof out + 8];
-            snprintf(xmf, sizeof xmf, "%s.xmf", out);
-            remove(out);
-            remove(xmf);
-        }
+        if (fin.result_kept) util_remove_job_files(w->results_dir, j->id);
         job_store_requeue(w->st, j->id);
         fprintf(stderr, "polydemd: job %s stopped by shutdown, queued again\n", j->id);
     } else if (rc == PD_ECANCELLED) {
