@@ -86,12 +86,10 @@ static int parse_pose(const char *flag, const char *s, pd_pose *pose)
     double v[7];
     if (parse_numbers(s, v, 7) != 0)
         return fail("%s: expected 7 numbers \"x y z qw qx qy qz\", got \"%s\"", flag, s);
-    double qn = sqrt(v[3] * v[3] + v[4] * v[4] + v[5] * v[5] + v[6] * v[6]);
-    if (!(qn > 0) || !isfinite(qn)) return fail("%s: quaternion \"%s\" has zero length", flag, s);
+    if (pd_quat_normalize(v + 3, pose->q) != PD_OK)
+        return fail("%s: quaternion \"%s\" has zero length", flag, s);
     for (int k = 0; k < 3; k++)
         pose->x[k] = v[k];
-    for (int k = 0; k < 4; k++)
-        pose->q[k] = v[3 + k] / qn;
     return 0;
 }
 
@@ -119,9 +117,10 @@ static int cmd_overlap(int argc, char **argv)
         } else if (!strcmp(a, "--device")) {
             char *end;
             if (i + 1 >= argc) return fail("%s: missing value%s", a, "");
-            device = (int)strtol(argv[++i], &end, 10);
-            if (*end || device < 0)
+            long d = strtol(argv[++i], &end, 10);
+            if (*end || end == argv[i] || d < 0 || d > 1000)
                 return fail("--device: expected a device index, got \"%s\"%s", argv[i], "");
+            device = (int)d;
         } else if (a[0] == '-' && a[1]) {
             return fail("overlap: unknown option \"%s\"%s", a, "");
         } else if (nfiles < 2) {
@@ -131,6 +130,8 @@ static int cmd_overlap(int argc, char **argv)
         }
     }
     if (nfiles != 2) return fail("overlap: two meshes expected, A and B%s%s", "", "");
+    if (device >= 0 && !use_cl)
+        return fail("overlap: --device picks the OpenCL device of --opencl; give both%s%s", "", "");
 
     pd_error err = {0};
     pd_mesh *m[2] = {NULL, NULL};
@@ -143,8 +144,13 @@ static int cmd_overlap(int argc, char **argv)
             goto done;
         }
     if (use_cl) {
-        if (pd_device_open(device, &dev, &err) != PD_OK ||
-            pd_overlap_cl(dev, m[0], &pose[0], m[1], &pose[1], flags, &c, &err) != PD_OK) {
+        if (pd_device_open(device, &dev, &err) != PD_OK) {
+            fprintf(stderr, "polydem: %s\n", err.msg);
+            rc = err.code == PD_EINVAL ? EXIT_USAGE
+                                       : 1; /* as run: no such device is a usage error */
+            goto done;
+        }
+        if (pd_overlap_cl(dev, m[0], &pose[0], m[1], &pose[1], flags, &c, &err) != PD_OK) {
             fprintf(stderr, "polydem: %s\n", err.msg);
             rc = 1;
             goto done;

@@ -579,6 +579,9 @@ int pd_mesh_builtin(const char *name, int triangles, unsigned seed, pd_mesh **ou
     if (!out) return pd_error_set(err, PD_EINVAL, "pd_mesh_builtin: no output pointer");
     *out = NULL;
     if (!name) name = "";
+    if (triangles < 0) /* 0 is the default; a negative count is a mistake, not a default */
+        return pd_error_set(err, PD_EINVAL, "builtin:%s: bad triangle count %d (not negative)",
+                            name, triangles);
     if (!strcmp(name, "cube")) {
         if (triangles > 0 && triangles != 12) return bad_count(name, triangles, "12", err);
         return make_cube(out, err);

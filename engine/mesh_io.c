@@ -514,13 +514,15 @@ int pd_mesh_open(const char *spec, pd_mesh **out, pd_error *err)
     if (nfields >= 1 && field[0][0]) {
         errno = 0;
         tris = strtol(field[0], &end, 10);
-        if (*end || errno == ERANGE || tris > INT_MAX || tris < INT_MIN)
+        if (*end || errno == ERANGE || tris > INT_MAX || tris < 0 ||
+            strspn(field[0], "0123456789") != strlen(field[0]))
             return pd_error_set(err, PD_EINVAL, "%s: bad triangle count '%s'", spec, field[0]);
     }
     if (nfields >= 2 && field[1][0]) {
         errno = 0;
         seed = strtoul(field[1], &end, 10);
-        if (*end || errno == ERANGE || seed > UINT_MAX || field[1][0] == '-')
+        if (*end || errno == ERANGE || seed > UINT_MAX ||
+            strspn(field[1], "0123456789") != strlen(field[1]))
             return pd_error_set(err, PD_EINVAL, "%s: bad seed '%s'", spec, field[1]);
     }
     return pd_mesh_builtin(name, (int)tris, (unsigned)seed, out, err);

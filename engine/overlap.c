@@ -15,11 +15,7 @@ int ovl_pts_cap(int nta, int ntb)
 /* Unit quaternion of q; 0 when q is zero or not finite. */
 static int quat_normalised(const double q[4], double out[4])
 {
-    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(n > 0) || !isfinite(n)) return 0;
-    for (int k = 0; k < 4; k++)
-        out[k] = q[k] / n;
-    return 1;
+    return pd_quat_normalize(q, out) == PD_OK;
 }
 
 int ovl_vertex_triangles(const pd_mesh *m, int **off_out, int **vt_out)

@@ -92,6 +92,9 @@ void sc_particles_destroy(sc_particles *p)
     free(p);
 }
 
+/* The most cells a generated group's lattice lists (8 bytes each for a random arrangement). */
+#define LATTICE_MAX 1e9
+
 /* Places a generated group's particles; returns PD_OK or PD_EINVAL/PD_ENOMEM. */
 static int place_group(const pd_scenario *s, int gi, rng *r, sc_particles *p, long first,
                        pd_error *err)
@@ -99,14 +102,42 @@ static int place_group(const pd_scenario *s, int gi, rng *r, sc_particles *p, lo
     const sc_group *g = &s->group[gi];
     double rr = s->shape[g->shape].radius_ratio, cell = 2 * rr * g->size.max;
     long dims[3];
-    double room = 1;
+    double room = 1, fit[3];
     for (int k = 0; k < 3; k++) {
-        dims[k] = (long)floor((g->region_max[k] - g->region_min[k]) / cell);
-        room *= (double)dims[k];
+        fit[k] = floor((g->region_max[k] - g->region_min[k]) / cell);
+        room *= fit[k];
     }
-    if (room < (double)g->count || room > 1e9)
+    if (!(room >= (double)g->count)) /* NaN too */
         return pd_error_set(err, PD_EINVAL, "/particles/%d: %ld particles do not fit the region",
                             gi, g->count);
+    if (room <= LATTICE_MAX) {
+        for (int k = 0; k < 3; k++)
+            dims[k] = (long)fit[k];
+    } else {
+        /*
+         * A region far larger than its particles need (1e3 grains in a 2 m box, a 1e5 m floor)
+         * holds more cells than can be listed: a lattice just large enough for the group,
+         * centred in the region, takes its place. The axes are sized from the thinnest up, each
+         * to the root of what is still needed, so a thin axis passes its share on.
+         */
+        int ax[3] = {0, 1, 2};
+        for (int a = 0; a < 2; a++)
+            for (int b = a + 1; b < 3; b++)
+                if (fit[ax[b]] < fit[ax[a]]) {
+                    int t = ax[a];
+                    ax[a] = ax[b];
+                    ax[b] = t;
+                }
+        double need = (double)g->count;
+        for (int i = 0; i < 3; i++) {
+            double d = fmin(fit[ax[i]], ceil(pow(need, 1.0 / (3 - i)) - 1e-9));
+            dims[ax[i]] = (long)d;
+            need = ceil(need / d);
+        }
+        if ((double)dims[0] * (double)dims[1] * (double)dims[2] < (double)g->count)
+            return pd_error_set(err, PD_EINVAL, "/particles/%d: no lattice of %ld cells found", gi,
+                                g->count);
+    }
     long ncell = dims[0] * dims[1] * dims[2];
     /* lattice: the first count cells; random: count cells chosen by a partial Fisher-Yates */
     long *pick = NULL;

@@ -116,6 +116,10 @@ typedef struct pd_pose {
     double q[4];
 } pd_pose;
 
+/* q / |q| into out (which may be q), exact in range for any finite q (no overflow of the squares).
+ * Returns PD_EINVAL for a zero or non-finite quaternion. */
+int pd_quat_normalize(const double q[4], double out[4]);
+
 /* Rotation matrix of a quaternion (normalised first). Returns PD_EINVAL for a zero quaternion. */
 int pd_quat_to_matrix(const double q[4], double r[3][3]);
 
@@ -158,7 +162,7 @@ typedef struct pd_scenario pd_scenario;
 
 /* One problem in a scenario: where (a JSON pointer, e.g. "/particles/0/size/std") and what. */
 typedef struct pd_diag {
-    char path[160];
+    char path[640]; /* a JSON pointer: names of up to 63 UTF-8 characters, escaped */
     char msg[352];
 } pd_diag;
 

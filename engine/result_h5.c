@@ -7,18 +7,22 @@
  * file is flushed after each, so a crashed run leaves a readable "<path>.partial" up to its last
  * row. The XDMF file is written at close, when the number of frames is known.
  */
+#define _DEFAULT_SOURCE /* flock(2) */
 #include <errno.h>
+#include <fcntl.h>
 #include <limits.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
+#include <unistd.h>
 
 #include <hdf5.h>
 
 #include "result_h5.h"
 
-#define NAME_MAX_LEN 128 /* shape and wall names: HDF5 link names, kept short for messages */
+#define NAME_MAX_LEN 255 /* bytes of a shape or wall name (scenario.h: 63 UTF-8 characters) */
 
 /* One extendible dataset: rows of shape tail[0] x tail[1] (rank - 1 of them) appended along F. */
 typedef struct rh5_ext {
@@ -50,6 +54,7 @@ static const char *const stage_names[RH5_NSTAGES] = {"integrate", "bvh", "traver
 
 struct rh5_writer {
     char *path, *partial;
+    int lock_fd;      /* the .partial, open and flock()ed while this writer owns it; -1 when not */
     const char *base; /* file name of path, how the XDMF file refers to it */
     hid_t file;
     int fields;
@@ -296,7 +301,8 @@ static int check_name(const rh5_writer *w, const char *what, const char *name, i
 {
     if (!name || !name[0] || strlen(name) > NAME_MAX_LEN || strchr(name, '/') ||
         !strcmp(name, ".") || !strcmp(name, "..")) {
-        return pd_error_set(err, PD_EINVAL, "%s: bad %s name '%.*s' (1 to %d characters, no '/')",
+        return pd_error_set(err, PD_EINVAL,
+                            "%s: bad %s name '%.*s' (1 to %d bytes, no '/', not '.' or '..')",
                             w->path, what, NAME_MAX_LEN, name ? name : "", NAME_MAX_LEN);
     }
     for (int i = 0; i < count; i++)
@@ -729,6 +735,7 @@ static void free_writer(rh5_writer *w)
     free(w->times);
     free(w->path);
     free(w->partial);
+    if (w->lock_fd >= 0) close(w->lock_fd); /* releases the lock */
     free(w);
 }
 
@@ -751,6 +758,7 @@ int rh5_create(const char *path, const char *scenario_json, int double_precision
     rh5_writer *w = calloc(1, sizeof *w);
     size_t len = strlen(path);
     if (w) {
+        w->lock_fd = -1;
         w->path = dupstr(path);
         w->partial = malloc(len + sizeof ".partial");
     }
@@ -780,17 +788,33 @@ int rh5_create(const char *path, const char *scenario_json, int double_precision
                             path);
     }
 
-    /* stdio first: its errno names the real cause (missing directory, permissions), which
-     * HDF5's message buries. */
-    FILE *probe = fopen(w->partial, "wb");
-    if (!probe) {
+    /*
+     * Own the .partial before truncating it: another run writing the same result holds an
+     * exclusive flock on it, and must keep its file (a second run used to truncate it, then
+     * remove it on its own failure). The lock is taken on our own descriptor, kept until the
+     * writer is freed; HDF5's own locking is switched off so that it does not trip over ours.
+     * open(2) first also names the real cause of a failure (missing directory, permissions),
+     * which HDF5's message buries.
+     */
+    w->lock_fd = open(w->partial, O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+    if (w->lock_fd < 0) {
         int rc = pd_error_set(err, PD_EIO, "%s: cannot create '%s': %s", path, w->partial,
                               strerror(errno));
         free_writer(w);
         return rc;
     }
-    fclose(probe);
-    w->file = H5Fcreate(w->partial, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (flock(w->lock_fd, LOCK_EX | LOCK_NB) != 0) {
+        int busy = errno == EWOULDBLOCK;
+        int rc = pd_error_set(err, PD_EIO, "%s: cannot lock '%s': %s", path, w->partial,
+                              busy ? "another run is writing this result; choose another path"
+                                   : strerror(errno));
+        free_writer(w); /* not ours: left as it is */
+        return rc;
+    }
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+    if (fapl >= 0 && H5Pset_file_locking(fapl, 0, 1) >= 0)
+        w->file = H5Fcreate(w->partial, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
+    if (fapl >= 0) H5Pclose(fapl);
     if (w->file < 0) {
         int rc = h5fail(w, err, "cannot create '%s'", w->partial);
         rh5_abort(w);
@@ -852,16 +876,19 @@ int rh5_finish(rh5_writer *w, const char *status, const char *message, pd_error 
                       w->nframes, w->times, w->mesh_nv, w->mesh_nt};
         rc = rh5_write_xdmf(xtmp, &x, err);
     }
+    int kept = 0; /* the result is whole, only its final name could not be given */
     if (rc == PD_OK && rename(w->partial, w->path) != 0) {
-        rc = pd_error_set(err, PD_EIO, "%s: cannot rename '%s' to it: %s", w->path, w->partial,
-                          strerror(errno));
+        kept = 1;
+        rc = pd_error_set(err, PD_EIO,
+                          "%s: cannot rename '%s' to it: %s; the whole result is kept as '%s'",
+                          w->path, w->partial, strerror(errno), w->partial);
     }
     if (rc == PD_OK && rename(xtmp, xmf) != 0) {
         rc = pd_error_set(err, PD_EIO, "%s: cannot rename '%s' to '%s': %s", w->path, xtmp, xmf,
                           strerror(errno));
     }
     if (rc != PD_OK) {
-        remove(w->partial);
+        if (!kept) remove(w->partial);
         if (xtmp) remove(xtmp);
     }
     free(xmf);

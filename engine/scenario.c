@@ -13,6 +13,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include "scenario.h"
 
@@ -97,7 +98,7 @@ static void only(sc_parse *p, json_t *o, const char *at, const char *const *allo
         for (const char *const *a = allowed; *a && !ok; a++)
             ok = !strcmp(*a, key);
         if (!ok) {
-            char c[160];
+            char c[SC_PATH_MAX];
             child(c, sizeof c, at, key);
             diag(p, c, "unknown field");
         }
@@ -110,7 +111,7 @@ enum { ANY = 0, POSITIVE = 1, NONNEG = 2 };
 static double num(sc_parse *p, json_t *o, const char *at, const char *key, int required, double def,
                   int rule, const char *unit)
 {
-    char c[160];
+    char c[SC_PATH_MAX];
     child(c, sizeof c, at, key);
     json_t *v = json_object_get(o, key);
     if (!v) {
@@ -137,11 +138,29 @@ static double num(sc_parse *p, json_t *o, const char *at, const char *key, int r
     return x;
 }
 
+/* An integer field in [lo, hi] (a JSON number with no fraction: 80 or 80.0); absent: def. */
+static long long integer(sc_parse *p, json_t *o, const char *at, const char *key, long long def,
+                         long long lo, long long hi)
+{
+    char c[SC_PATH_MAX];
+    child(c, sizeof c, at, key);
+    json_t *v = json_object_get(o, key);
+    if (!v) return def;
+    double x = json_is_integer(v) ? (double)json_integer_value(v)
+               : json_is_real(v)  ? json_real_value(v)
+                                  : NAN;
+    if (!(x >= (double)lo && x <= (double)hi) || x != floor(x)) {
+        diag(p, c, "must be an integer from %lld to %lld", lo, hi);
+        return def;
+    }
+    return json_is_integer(v) ? json_integer_value(v) : (long long)x;
+}
+
 /* A fixed-length numeric array field; absent: def (when def is NULL the field is required). */
 static int numvec(sc_parse *p, json_t *o, const char *at, const char *key, int n, const double *def,
                   double *out)
 {
-    char c[160];
+    char c[SC_PATH_MAX];
     child(c, sizeof c, at, key);
     json_t *v = json_object_get(o, key);
     if (!v) {
@@ -159,7 +178,7 @@ static int numvec(sc_parse *p, json_t *o, const char *at, const char *key, int n
     for (int i = 0; i < n; i++) {
         json_t *x = json_array_get(v, (size_t)i);
         if (!json_is_number(x) || !isfinite(json_number_value(x))) {
-            char ci[160];
+            char ci[SC_PATH_MAX];
             child_i(ci, sizeof ci, c, (size_t)i);
             diag(p, ci, "must be a finite number");
             return 0;
@@ -172,7 +191,7 @@ static int numvec(sc_parse *p, json_t *o, const char *at, const char *key, int n
 /* A string field, or NULL (an error when required). */
 static const char *str(sc_parse *p, json_t *o, const char *at, const char *key, int required)
 {
-    char c[160];
+    char c[SC_PATH_MAX];
     child(c, sizeof c, at, key);
     json_t *v = json_object_get(o, key);
     if (!v) {
@@ -189,7 +208,7 @@ static const char *str(sc_parse *p, json_t *o, const char *at, const char *key, 
 /* An object member that must be a JSON object when present. */
 static json_t *obj(sc_parse *p, json_t *o, const char *at, const char *key, int required)
 {
-    char c[160];
+    char c[SC_PATH_MAX];
     child(c, sizeof c, at, key);
     json_t *v = json_object_get(o, key);
     if (!v) {
@@ -206,7 +225,7 @@ static json_t *obj(sc_parse *p, json_t *o, const char *at, const char *key, int 
 /* An object member that must be a JSON array when present. */
 static json_t *arr(sc_parse *p, json_t *o, const char *at, const char *key)
 {
-    char c[160];
+    char c[SC_PATH_MAX];
     child(c, sizeof c, at, key);
     json_t *v = json_object_get(o, key);
     if (v && !json_is_array(v)) {
@@ -246,16 +265,30 @@ static int material_ref(sc_parse *p, json_t *o, const char *at, const char *key)
     if (!name) return -1;
     int m = find_material(p->s, name);
     if (m < 0) {
-        char c[160];
+        char c[SC_PATH_MAX];
         child(c, sizeof c, at, key);
         diag(p, c, "no material named '%s' in /materials", name);
     }
     return m;
 }
 
-static void copy_name(char *dst, const char *src, sc_parse *p, const char *at)
+/*
+ * Copies a name of at most SC_NAME_CHARS characters (code points, as the schema's maxLength
+ * counts them). A shape's or wall's name (group = 1) also names an HDF5 group in the result
+ * (/shapes/<name>, /walls/<name>), so it must be a plain link name: not empty, no '/', not "."
+ * or "..".
+ */
+static void copy_name(char *dst, const char *src, sc_parse *p, const char *at, int group)
 {
-    if (strlen(src) >= SC_NAME_MAX) diag(p, at, "name longer than %d characters", SC_NAME_MAX - 1);
+    size_t chars = 0;
+    for (const unsigned char *c = (const unsigned char *)src; *c; c++)
+        chars += (*c & 0xC0) != 0x80; /* UTF-8: count the bytes that start a character */
+    if (chars > SC_NAME_CHARS)
+        diag(p, at, "name longer than %d characters", SC_NAME_CHARS);
+    else if (group && !src[0])
+        diag(p, at, "name must not be empty");
+    else if (group && (strchr(src, '/') || !strcmp(src, ".") || !strcmp(src, "..")))
+        diag(p, at, "name '%s' cannot name a group in the result: no '/', not '.' or '..'", src);
     put(dst, SC_NAME_MAX, "%s", src);
 }
 
@@ -273,7 +306,10 @@ static void parse_time(sc_parse *p, json_t *root)
     s->output_interval = num(p, t, "/time", "output_interval", 0, out_def, POSITIVE, "s");
     double stats_def = s->output_interval / 10 > s->dt ? s->output_interval / 10 : s->dt;
     s->stats_interval = num(p, t, "/time", "stats_interval", 0, stats_def, POSITIVE, "s");
-    if (s->output_interval < s->dt)
+    if (s->duration < s->dt)
+        diag(p, "/time/duration", "%g s is shorter than one time step dt (%g s)", s->duration,
+             s->dt);
+    else if (s->output_interval < s->dt)
         diag(p, "/time/output_interval", "%g s is shorter than dt (%g s)", s->output_interval,
              s->dt);
     if (s->stats_interval < s->dt)
@@ -296,7 +332,7 @@ static void parse_materials(sc_parse *p, json_t *root)
     json_t *v;
     json_object_foreach(m, name, v)
     {
-        char at[160];
+        char at[SC_PATH_MAX];
         child(at, sizeof at, "/materials", name);
         if (!json_is_object(v)) {
             diag(p, at, "must be an object");
@@ -304,12 +340,12 @@ static void parse_materials(sc_parse *p, json_t *root)
         }
         only(p, v, at, keys);
         sc_material *x = &s->mat[s->nmat++];
-        copy_name(x->name, name, p, at);
+        copy_name(x->name, name, p, at, 0);
         x->density = num(p, v, at, "density", 1, 1000, POSITIVE, "kg/m^3");
         x->youngs_modulus = num(p, v, at, "youngs_modulus", 1, 1e7, POSITIVE, "Pa");
         x->poisson_ratio = num(p, v, at, "poisson_ratio", 0, 0.25, ANY, "");
         if (!(x->poisson_ratio > -1 && x->poisson_ratio < 0.5)) {
-            char c[160];
+            char c[SC_PATH_MAX];
             child(c, sizeof c, at, "poisson_ratio");
             diag(p, c, "must lie in (-1, 0.5), got %g", x->poisson_ratio);
             x->poisson_ratio = 0.25;
@@ -341,7 +377,7 @@ static void parse_interactions(sc_parse *p, json_t *root)
     json_t *v;
     json_array_foreach(a, i, v)
     {
-        char at[160], c[160];
+        char at[SC_PATH_MAX], c[SC_PATH_MAX];
         child_i(at, sizeof at, "/interactions", i);
         if (!json_is_object(v)) {
             diag(p, at, "must be an object");
@@ -362,7 +398,7 @@ static void parse_interactions(sc_parse *p, json_t *root)
             const char *mn = json_string_value(json_array_get(b, (size_t)k));
             x.mat[k] = find_material(s, mn);
             if (x.mat[k] < 0) {
-                char ck[160];
+                char ck[SC_PATH_MAX];
                 child_i(ck, sizeof ck, c, (size_t)k);
                 diag(p, ck, "no material named '%s' in /materials", mn);
                 ok = 0;
@@ -421,11 +457,28 @@ static void parse_interactions(sc_parse *p, json_t *root)
     }
 }
 
+/* Records a file the scenario was read from; PD_ENOMEM or PD_OK (a file that cannot be stat'ed
+ * is not recorded: its reader reports it). */
+static int add_input(pd_scenario *s, const char *path)
+{
+    struct stat st;
+    if (stat(path, &st) != 0) return PD_OK;
+    sc_input *in = realloc(s->inputs, sizeof *in * ((size_t)s->ninputs + 1));
+    if (!in) return PD_ENOMEM;
+    s->inputs = in;
+    in += s->ninputs;
+    if (!(in->path = strdup(path))) return PD_ENOMEM;
+    in->dev = (unsigned long long)st.st_dev;
+    in->ino = (unsigned long long)st.st_ino;
+    s->ninputs++;
+    return PD_OK;
+}
+
 /* Loads the mesh file named by the "mesh" field of the object at `at`, relative to the scenario's
  * directory; NULL after a diagnostic that quotes the loader's message (file and defect). */
 static pd_mesh *load_mesh_file(sc_parse *p, const char *file, const char *at)
 {
-    char path[4096], c[160];
+    char path[4096], c[SC_PATH_MAX];
     pd_mesh *m = NULL;
     pd_error err = {0};
     if (file[0] == '/' || !p->base_dir)
@@ -435,6 +488,8 @@ static pd_mesh *load_mesh_file(sc_parse *p, const char *file, const char *at)
     if (pd_mesh_load(path, &m, &err) != PD_OK) {
         child(c, sizeof c, at, "mesh");
         diag(p, c, "%s", err.msg);
+    } else if (add_input(p->s, path) != PD_OK) {
+        diag(p, at, "out of memory");
     }
     return m;
 }
@@ -444,7 +499,7 @@ static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
 {
     pd_error err = {0};
     pd_mesh *m = NULL;
-    char c[160];
+    char c[SC_PATH_MAX];
     const char *builtin = str(p, v, at, "builtin", 0);
     const char *file = str(p, v, at, "mesh", 0);
     json_t *verts = json_object_get(v, "vertices");
@@ -454,8 +509,14 @@ static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
         return NULL;
     }
     if (builtin) {
-        double tri = num(p, v, at, "triangles", 0, 0, POSITIVE, "");
-        double seed = num(p, v, at, "seed", 0, 1, NONNEG, "");
+        /* "triangles" picks a level of the refinable shapes (and is checked against the fixed
+         * ones' own count); "seed" draws a rock and means nothing to the others */
+        long long tri = integer(p, v, at, "triangles", 0, 1, 1000000);
+        long long seed = integer(p, v, at, "seed", 1, 0, 4294967295LL);
+        if (json_object_get(v, "seed") && strcmp(builtin, "rock")) {
+            child(c, sizeof c, at, "seed");
+            diag(p, c, "only a \"rock\" takes a seed");
+        }
         if (pd_mesh_builtin(builtin, (int)tri, (unsigned)seed, &m, &err) != PD_OK) {
             child(c, sizeof c, at, "builtin");
             diag(p, c, "%s", err.msg);
@@ -520,7 +581,7 @@ static void parse_shapes(sc_parse *p, json_t *root)
     json_t *v;
     json_object_foreach(o, name, v)
     {
-        char at[160];
+        char at[SC_PATH_MAX];
         child(at, sizeof at, "/shapes", name);
         if (!json_is_object(v)) {
             diag(p, at, "must be an object");
@@ -528,9 +589,15 @@ static void parse_shapes(sc_parse *p, json_t *root)
         }
         only(p, v, at, keys);
         sc_shape *x = &s->shape[s->nshape++];
-        copy_name(x->name, name, p, at);
-        if (json_object_get(v, "sphere")) {
+        copy_name(x->name, name, p, at, 1);
+        json_t *sph = json_object_get(v, "sphere");
+        if (sph) {
             if (json_object_size(v) != 1) diag(p, at, "a \"sphere\" takes no other field");
+            if (!json_is_object(sph) || json_object_size(sph) != 0) {
+                char c[SC_PATH_MAX];
+                child(c, sizeof c, at, "sphere");
+                diag(p, c, "must be {} (a sphere's size is the particle's size)");
+            }
             x->kind = SC_SHAPE_SPHERE;
             x->radius_ratio = 0.5;
             continue;
@@ -557,20 +624,17 @@ static void parse_shapes(sc_parse *p, json_t *root)
 /* Normalises a quaternion field; 0 after a diagnostic. */
 static int quat(sc_parse *p, const char *at, double q[4])
 {
-    double n = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(n > 0)) {
+    if (pd_quat_normalize(q, q) != PD_OK) {
         diag(p, at, "quaternion [w, x, y, z] must not be zero");
         return 0;
     }
-    for (int k = 0; k < 4; k++)
-        q[k] /= n;
     return 1;
 }
 
 static void parse_size(sc_parse *p, json_t *g, const char *at, sc_size *z)
 {
     static const char *const keys[] = {"distribution", "mean", "std", "min", "max", NULL};
-    char c[160];
+    char c[SC_PATH_MAX];
     child(c, sizeof c, at, "size");
     json_t *v = json_object_get(g, "size");
     memset(z, 0, sizeof *z);
@@ -605,13 +669,13 @@ static void parse_size(sc_parse *p, json_t *g, const char *at, sc_size *z)
         z->min = num(p, v, c, "min", 0, z->mean - 3 * z->std, ANY, "m");
         z->max = num(p, v, c, "max", 0, z->mean + 3 * z->std, POSITIVE, "m");
         if (!(z->min > 0)) {
-            char cm[160];
+            char cm[SC_PATH_MAX];
             child(cm, sizeof cm, c, "min");
             diag(p, cm, "must be > 0 m (mean - 3 std is %g m when min is not given)", z->min);
             z->min = z->mean;
         }
     } else if (dist) {
-        char cd[160];
+        char cd[SC_PATH_MAX];
         child(cd, sizeof cd, c, "distribution");
         diag(p, cd, "must be \"normal\" or \"uniform\", got \"%s\"", dist);
         return;
@@ -636,7 +700,7 @@ static void parse_list(sc_parse *p, json_t *list, const char *at, sc_group *g)
     json_t *v;
     json_array_foreach(list, i, v)
     {
-        char c[160];
+        char c[SC_PATH_MAX];
         child_i(c, sizeof c, at, i);
         sc_particle *x = &g->list[i];
         if (!json_is_object(v)) {
@@ -646,7 +710,7 @@ static void parse_list(sc_parse *p, json_t *list, const char *at, sc_group *g)
         only(p, v, c, keys);
         numvec(p, v, c, "position", 3, NULL, x->position);
         if (numvec(p, v, c, "orientation", 4, ident, x->orientation)) {
-            char co[160];
+            char co[SC_PATH_MAX];
             child(co, sizeof co, c, "orientation");
             quat(p, co, x->orientation);
         }
@@ -674,7 +738,7 @@ static void parse_particles(sc_parse *p, json_t *root)
     json_t *v;
     json_array_foreach(a, i, v)
     {
-        char at[160], c[160];
+        char at[SC_PATH_MAX], c[SC_PATH_MAX];
         child_i(at, sizeof at, "/particles", i);
         if (!json_is_object(v)) {
             diag(p, at, "must be an object");
@@ -702,7 +766,7 @@ static void parse_particles(sc_parse *p, json_t *root)
                                               "angular_velocity"};
             for (int k = 0; k < 7; k++)
                 if (json_object_get(v, gen[k])) {
-                    char ck[160];
+                    char ck[SC_PATH_MAX];
                     child(ck, sizeof ck, at, gen[k]);
                     diag(p, ck, "not allowed with \"list\" (give it per particle)");
                 }
@@ -723,13 +787,19 @@ static void parse_particles(sc_parse *p, json_t *root)
             child(c, sizeof c, at, "region");
             only(p, reg, c, rk);
             if (numvec(p, reg, c, "min", 3, NULL, g->region_min) &&
-                numvec(p, reg, c, "max", 3, NULL, g->region_max))
-                for (int k = 0; k < 3; k++)
+                numvec(p, reg, c, "max", 3, NULL, g->region_max)) {
+                for (int k = 0; k < 3; k++) {
                     if (!(g->region_max[k] > g->region_min[k])) {
                         diag(p, c, "max must exceed min on every axis (axis %d: %g <= %g m)", k,
                              g->region_max[k], g->region_min[k]);
                         break;
                     }
+                    if (!isfinite(g->region_max[k] - g->region_min[k])) {
+                        diag(p, c, "too large: max - min overflows on axis %d", k);
+                        break;
+                    }
+                }
+            }
         }
         const char *arr = str(p, v, at, "arrangement", 0);
         if (arr && !strcmp(arr, "random"))
@@ -777,7 +847,7 @@ static void parse_walls(sc_parse *p, json_t *root)
     json_t *v;
     json_array_foreach(a, i, v)
     {
-        char at[160], c[160];
+        char at[SC_PATH_MAX], c[SC_PATH_MAX];
         child_i(at, sizeof at, "/walls", i);
         if (!json_is_object(v)) {
             diag(p, at, "must be an object");
@@ -788,7 +858,7 @@ static void parse_walls(sc_parse *p, json_t *root)
         const char *name = str(p, v, at, "name", 1);
         if (name) {
             child(c, sizeof c, at, "name");
-            copy_name(w->name, name, p, c);
+            copy_name(w->name, name, p, c, 1);
             for (int k = 0; k + 1 < s->nwall; k++)
                 if (!strcmp(s->wall[k].name, w->name)) diag(p, c, "a second wall named '%s'", name);
         }
@@ -828,7 +898,7 @@ static void parse_rest(sc_parse *p, json_t *root)
     static const double g0[3] = {0, 0, -9.81}, zero[3] = {0, 0, 0};
     pd_scenario *s = p->s;
     const char *name = str(p, root, "", "name", 0);
-    copy_name(s->name, name ? name : "scenario", p, "/name");
+    copy_name(s->name, name ? name : "scenario", p, "/name", 0);
     const char *prec = str(p, root, "", "precision", 0);
     s->double_precision = 1;
     if (prec && !strcmp(prec, "single"))
@@ -876,7 +946,7 @@ static void parse_rest(sc_parse *p, json_t *root)
                 for (int k = 0; k < 4; k++)
                     if (json_is_string(v) && !strcmp(json_string_value(v), names[k])) bit = 1 << k;
                 if (!bit) {
-                    char c[160];
+                    char c[SC_PATH_MAX];
                     child_i(c, sizeof c, "/output/fields", i);
                     diag(p, c, "must be one of position, orientation, velocity, angular_velocity");
                 }
@@ -914,6 +984,61 @@ static void check_pairs(sc_parse *p)
     if (s->nmat > 64) diag(p, "/materials", "at most 64 materials");
 }
 
+/*
+ * What no time step can rescue, caught before a run fails at its first step with advice to
+ * reduce dt: particle masses and moments of inertia beyond the precision's range, a cohesion
+ * range wider than the particles (every particle would pair with every other, and the broad
+ * phase's margins overflow), and Stokes drag relaxing a particle's velocity faster than a step
+ * (explicit drag is stable only for dt below ~2 tau, tau = rho d^2 / (18 mu)).
+ */
+static void check_extremes(sc_parse *p)
+{
+    pd_scenario *s = p->s;
+    double big = s->double_precision ? 1e300 : 1e36, tiny = 1 / big, dall = 0;
+    for (int i = 0; i < s->ngroup; i++) {
+        const sc_group *g = &s->group[i];
+        double dmin = g->size.min, dmax = g->size.max;
+        if (g->list) {
+            dmin = INFINITY;
+            dmax = 0;
+            for (long k = 0; k < g->count; k++) {
+                dmin = fmin(dmin, g->list[k].size);
+                dmax = fmax(dmax, g->list[k].size);
+            }
+        }
+        if (g->material < 0 || !(dmax > 0)) continue;
+        dall = fmax(dall, dmax);
+        double rho = s->mat[g->material].density, k = rho * PI / 6; /* mass = k d^3 */
+        char c[SC_PATH_MAX];
+        child_i(c, sizeof c, "/particles", (size_t)i);
+        if (!(k * dmax * dmax * dmax * dmax * dmax < big) || !(k * dmin * dmin * dmin > tiny))
+            diag(p, c,
+                 "particles of %g to %g m at %g kg/m^3 have masses or moments of inertia beyond "
+                 "what %s precision holds",
+                 dmin, dmax, rho, s->double_precision ? "double" : "single");
+        else if (s->has_fluid && s->fluid_viscosity > 0 && !s->allow_unstable_dt) {
+            double tau = rho * dmin * dmin / (18 * s->fluid_viscosity);
+            if (s->dt > tau)
+                diag(p, "/time/dt",
+                     "%g s exceeds the Stokes relaxation time %.3g s of %s's smallest particles "
+                     "(%g m) in /fluid: drag would be unstable; set \"allow_unstable_dt\": true "
+                     "to run anyway",
+                     s->dt, tau, c, dmin);
+        }
+    }
+    for (int i = 0; i < s->nint; i++) {
+        const sc_interaction *x = &s->inter[i];
+        if (x->cohesion > 0 && dall > 0 && x->cohesion_range > dall) {
+            char c[SC_PATH_MAX];
+            put(c, sizeof c, "/interactions/%d/cohesion_range", i);
+            diag(p, c,
+                 "%g m is wider than the largest particle (%g m): cohesion reaches across such "
+                 "gaps only between touching effect surfaces, a fraction of a particle",
+                 x->cohesion_range, dall);
+        }
+    }
+}
+
 /* A generated group must fit its region on a lattice of circumscribed spheres of the largest. */
 static void check_fit(sc_parse *p)
 {
@@ -926,7 +1051,7 @@ static void check_fit(sc_parse *p)
         for (int k = 0; k < 3; k++)
             room *= floor((g->region_max[k] - g->region_min[k]) / cell);
         if (room < (double)g->count) {
-            char c[160];
+            char c[SC_PATH_MAX];
             child_i(c, sizeof c, "/particles", (size_t)i);
             diag(p, c,
                  "%ld particles of size up to %g m do not fit in the region: it holds %.0f "
@@ -951,6 +1076,9 @@ void pd_scenario_destroy(pd_scenario *s)
     free(s->group);
     free(s->wall);
     free(s->json);
+    for (int i = 0; i < s->ninputs; i++)
+        free(s->inputs[i].path);
+    free(s->inputs);
     free(s);
 }
 
@@ -1000,6 +1128,7 @@ int pd_scenario_parse(const char *json_text, const char *base_dir, pd_scenario *
     if (!p.failed) {
         check_pairs(&p);
         check_fit(&p);
+        check_extremes(&p);
     }
     if (!p.failed) {
         double rayleigh, hertz, stable;
@@ -1072,6 +1201,11 @@ int pd_scenario_load(const char *path, pd_scenario **out, pd_diags *diags, pd_er
     }
     int rc = pd_scenario_parse(buf, base, out, diags, err);
     free(buf);
+    if (rc == PD_OK && add_input(*out, path) != PD_OK) {
+        pd_scenario_destroy(*out);
+        *out = NULL;
+        return pd_error_set(err, PD_ENOMEM, "%s: out of memory", path);
+    }
     if (rc == PD_EINVAL && err) {
         char first[sizeof err->msg];
         put(first, sizeof first, "%s", err->msg);

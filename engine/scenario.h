@@ -9,7 +9,9 @@
 
 #include "polydem.h"
 
-#define SC_NAME_MAX 64
+#define SC_NAME_CHARS 63                    /* the schema's maxLength, in characters */
+#define SC_NAME_MAX (4 * SC_NAME_CHARS + 1) /* bytes: UTF-8 takes up to 4 a character */
+#define SC_PATH_MAX 640 /* a JSON pointer into a scenario (pd_diag's path): two names, escaped */
 
 typedef struct sc_material {
     char name[SC_NAME_MAX];
@@ -66,6 +68,12 @@ typedef struct sc_wall {
 
 enum { SC_OUT_POSITION = 1, SC_OUT_ORIENTATION = 2, SC_OUT_VELOCITY = 4, SC_OUT_ANGULAR = 8 };
 
+/* A file the scenario was read from (the scenario itself, a mesh), which a run must not write. */
+typedef struct sc_input {
+    char *path;
+    unsigned long long dev, ino; /* stat(2)'s identity of the file, through symbolic links */
+} sc_input;
+
 struct pd_scenario {
     char name[SC_NAME_MAX];
     int double_precision;
@@ -83,10 +91,15 @@ struct pd_scenario {
     double fluid_viscosity, fluid_velocity[3];
     int output_fields; /* SC_OUT_* */
     char *json;        /* the scenario as submitted */
+    sc_input *inputs;  /* files read (pd_scenario_load's file, mesh files) */
+    int ninputs;
 };
 
 /* The interaction of materials a and b, or NULL. */
 const sc_interaction *sc_interaction_of(const pd_scenario *s, int a, int b);
+
+/* The steps a run of `duration` takes at dt (pd_run and pd_scenario_summarize agree on it). */
+long long sc_steps(double duration, double dt);
 
 /* Stable time step estimates (scenario_dt.c); see pd_scenario_summary in polydem.h. */
 void sc_dt_estimates(const pd_scenario *s, double *rayleigh, double *hertz, double *stable);

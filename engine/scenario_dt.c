@@ -148,6 +148,15 @@ void sc_dt_estimates(const pd_scenario *s, double *rayleigh, double *hertz, doub
     *stable = a < b ? a : b;
 }
 
+long long sc_steps(double duration, double dt)
+{
+    /* a whole number of steps to rounding (0.5 s at 1e-5 s is 49999.99.. or 50000.00..1): that
+     * number; otherwise enough steps to cover the duration */
+    double x = duration / dt;
+    double n = nearbyint(x);
+    return (long long)(fabs(x - n) <= 1e-9 * fmax(1, x) ? n : ceil(x));
+}
+
 void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out)
 {
     memset(out, 0, sizeof *out);
@@ -158,7 +167,7 @@ void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out)
     out->walls = s->nwall;
     out->dt = s->dt;
     out->duration = s->duration;
-    out->steps = (long)ceil(s->duration / s->dt - 1e-9);
+    out->steps = (long)sc_steps(s->duration, s->dt);
     sc_dt_estimates(s, &out->dt_rayleigh, &out->dt_hertz, &out->dt_stable);
     /*
      * Device memory, a planning estimate: per particle its state (position, orientation, velocity,

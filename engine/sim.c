@@ -3,8 +3,10 @@
  * rows, frames, progress reports, cancellation, and the divergence checks.
  */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 
 #define PD_DOUBLE 1
@@ -146,6 +148,40 @@ const char *pd_run_status(int rc)
                                  : "failed";
 }
 
+/*
+ * Refuses, before any work, an output path that names a directory (the finished run could not be
+ * renamed to it), or whose result, XDMF file or their .partial files would be one of the files
+ * the scenario was read from: writing them would destroy the input (compared by device and inode,
+ * so symbolic links and other spellings of the same file are caught).
+ */
+static int check_output(const pd_scenario *s, const char *path, pd_error *err)
+{
+    static const char *const suffix[] = {"", ".partial", ".xmf", ".xmf.partial"};
+    struct stat st;
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode))
+        return pd_error_set(err, PD_EINVAL,
+                            "output '%s' is a directory: give the result file's name, e.g. "
+                            "'%s/result.h5'",
+                            path, path);
+    size_t len = strlen(path) + sizeof ".xmf.partial";
+    char *name = malloc(len);
+    if (!name) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
+    int rc = PD_OK;
+    for (int k = 0; k < 4 && rc == PD_OK; k++) {
+        snprintf(name, len, "%s%s", path, suffix[k]);
+        if (stat(name, &st) != 0) continue;
+        for (int i = 0; i < s->ninputs && rc == PD_OK; i++)
+            if ((unsigned long long)st.st_dev == s->inputs[i].dev &&
+                (unsigned long long)st.st_ino == s->inputs[i].ino)
+                rc = pd_error_set(err, PD_EINVAL,
+                                  "output '%s' would overwrite '%s', which the scenario was read "
+                                  "from: choose another output path",
+                                  path, s->inputs[i].path);
+    }
+    free(name);
+    return rc;
+}
+
 int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_progress *final,
            pd_error *err)
 {
@@ -162,7 +198,9 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
     run_host h;
     memset(&h, 0, sizeof h);
     double t_start = now_seconds();
-    int rc = sim_create(dev, s, &m, err);
+    int rc = check_output(s, opt->output_path, err);
+    if (rc != PD_OK) return rc;
+    rc = sim_create(dev, s, &m, err);
     if (rc != PD_OK) return rc;
     size_t n = (size_t)m->n;
     h.x = malloc(sizeof(double) * 3 * n);
@@ -177,7 +215,7 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
     }
     if ((rc = open_result(m, opt, &w, err)) != PD_OK) goto done;
 
-    long long steps = llround(s->duration / s->dt);
+    long long steps = sc_steps(s->duration, s->dt);
     long long stats_every = llround(s->stats_interval / s->dt);
     long long frame_every = llround(s->output_interval / s->dt);
     if (stats_every < 1) stats_every = 1;

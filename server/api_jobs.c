@@ -34,7 +34,7 @@ static void submission_free(submission *sub)
 
 static void detail(json_t *details, const char *prefix, const char *path, const char *msg)
 {
-    char full[512], m[512];
+    char full[768], m[512];
     snprintf(full, sizeof full, "%s%s", prefix, path);
     snprintf(m, sizeof m, "%s", msg);
     json_array_append_new(

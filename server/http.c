@@ -5,6 +5,7 @@
 #include "util.h"
 
 #include <arpa/inet.h>
+#include <ctype.h>
 #include <errno.h>
 #include <netdb.h>
 #include <netinet/in.h>
@@ -159,9 +160,43 @@ static int is(const char *a, const char *b)
 
 static enum MHD_Result not_allowed(http_req *r, const char *allow)
 {
+    char method[64]; /* the client's bytes: made valid UTF-8 for the JSON string */
+    snprintf(method, sizeof method, "%s", r->method);
+    util_utf8_fix(method);
     json_t *e = json_pack("{s:{s:s, s:s++}}", "error", "code", "method_not_allowed", "message",
-                          r->method, " is not allowed here; allowed: ", allow);
+                          method, " is not allowed here; allowed: ", allow);
     return http_json_hdr(r, 405, e, "Allow", allow);
+}
+
+/* The host of an Origin ("scheme://host[:port]") or Host ("host[:port]") value, without the
+ * port, into out; 0 when there is none. */
+static int host_of(const char *v, char *out, size_t n)
+{
+    const char *sep = strstr(v, "://");
+    const char *h = sep ? sep + 3 : v;
+    size_t len = h[0] == '[' ? strcspn(h, "]") + 1 : strcspn(h, ":/"); /* [::1]:8080 */
+    if (!len || len >= n) return 0;
+    for (size_t i = 0; i < len; i++)
+        out[i] = (char)tolower((unsigned char)h[i]);
+    out[len] = 0;
+    return 1;
+}
+
+/*
+ * Whether a request that changes something (POST, DELETE) comes from a web page of another
+ * site. Browsers send Origin with such requests; curl, sweep.sh and the Python client send none,
+ * and the dashboard's own requests carry the daemon's host. Without this, any page a user visits
+ * could queue, cancel or delete jobs on the daemon at localhost through the user's browser (a
+ * text/plain POST needs no CORS preflight). Hosts are compared without ports: behind the
+ * documented nginx, Host is nginx's $host, which has none.
+ */
+static int foreign_origin(http_req *r)
+{
+    const char *o = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, "Origin");
+    if (!o) return 0;
+    const char *h = MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, MHD_HTTP_HEADER_HOST);
+    char oh[256], hh[256];
+    return !h || !host_of(o, oh, sizeof oh) || !host_of(h, hh, sizeof hh) || strcmp(oh, hh);
 }
 
 static enum MHD_Result unauthorized(http_req *r, const char *why)
@@ -359,11 +394,21 @@ static enum MHD_Result route(http_req *r)
                      is(routes[i].method, "GET") ? ", HEAD" : "");
         }
     }
-    int v1 = !strncmp(r->url, "/v1/", 4) || is(r->url, "/v1");
+    /* Decided on the first segment as the routes see it, not on the URL's spelling: "//v1/jobs"
+     * (and "/%2Fv1/jobs", which arrives decoded) reach the same routes as "/v1/jobs", so they
+     * must need the same token. */
+    const char *first = r->url;
+    while (*first == '/')
+        first++;
+    int v1 = !strncmp(first, "v1", 2) && (first[2] == '/' || !first[2]);
     if (v1 && r->app->auth) {
         enum MHD_Result ret;
         if (authenticate(r, n > 0 && is(seg[n - 1], "events"), &ret)) return ret;
     }
+    if (hit && !is(method, "GET") && foreign_origin(r))
+        return http_error(r, 403, "cross_origin",
+                          "%s from another site's page refused (its Origin is not this server)",
+                          method);
     if (hit) return hit->fn(r, p);
     if (allow[0]) return not_allowed(r, allow);
     if (v1 || is(r->url, "/healthz") || is(r->url, "/metrics")) return not_found(r);

@@ -49,6 +49,15 @@ static const char *const migrations[] = {
     "  created_at TEXT NOT NULL,"
     "  PRIMARY KEY (owner, key));"
     "CREATE INDEX idempotency_job ON idempotency (job_id);",
+    /* 2: a deleted job's place in the list, so that a page cursor (?after=ID) naming it still
+     * works: "list finished jobs, delete them, fetch the next page" is the usual clean-up loop */
+    "CREATE TABLE deleted_jobs ("
+    "  id TEXT PRIMARY KEY,"
+    "  owner TEXT,"
+    "  seq INTEGER NOT NULL);"
+    "CREATE TRIGGER jobs_deleted AFTER DELETE ON jobs BEGIN"
+    "  INSERT OR REPLACE INTO deleted_jobs (id, owner, seq) VALUES (old.id, old.owner, old.seq);"
+    "  END;",
 };
 #define NMIGRATIONS ((int)(sizeof migrations / sizeof migrations[0]))
 
@@ -62,6 +71,7 @@ enum {
     S_SCENARIO,
     S_LIST,
     S_SEQ_OF,
+    S_CURSOR, /* S_SEQ_OF, or the seq a deleted job had */
     S_COUNT,
     S_CLAIM,
     S_PROGRESS,
@@ -84,6 +94,8 @@ static const char *const stmt_sql[S_NSTMT] = {
                " AND (?3 IS NULL OR EXISTS (SELECT 1 FROM json_each(jobs.tags) WHERE value = ?3))"
                " AND (?4 IS NULL OR seq < ?4) ORDER BY seq DESC LIMIT ?5",
     [S_SEQ_OF] = "SELECT seq FROM jobs WHERE id = ?1 AND " OWNER_OK,
+    [S_CURSOR] = "SELECT seq FROM jobs WHERE id = ?1 AND " OWNER_OK
+                 " UNION ALL SELECT seq FROM deleted_jobs WHERE id = ?1 AND " OWNER_OK " LIMIT 1",
     [S_COUNT] = "SELECT status, COUNT(*) FROM jobs GROUP BY status",
     [S_CLAIM] = "UPDATE jobs SET status = 'running', started_at = ?1, progress = NULL, "
                 "error = NULL, attempts = attempts + 1 WHERE seq = (SELECT seq FROM jobs WHERE "
@@ -92,8 +104,9 @@ static const char *const stmt_sql[S_NSTMT] = {
     [S_PROGRESS] = "UPDATE jobs SET progress = ?2 WHERE id = ?1 AND status = 'running'",
     [S_FINISH] = "UPDATE jobs SET status = ?2, finished_at = ?3, error = ?4, result = ?5, "
                  "progress = COALESCE(?6, progress) WHERE id = ?1 AND status = 'running'",
-    [S_REQUEUE] = "UPDATE jobs SET status = 'queued', started_at = NULL, progress = NULL "
-                  "WHERE id = ?1 AND status = 'running'",
+    /* a shutdown's requeue gives the try back: attempts counts the tries the daemon died in */
+    [S_REQUEUE] = "UPDATE jobs SET status = 'queued', started_at = NULL, progress = NULL, "
+                  "attempts = MAX(attempts - 1, 0) WHERE id = ?1 AND status = 'running'",
     [S_CANCEL_QUEUED] = "UPDATE jobs SET status = 'cancelled', finished_at = ?3, "
                         "cancel_requested = 1, error = 'cancelled before it ran' "
                         "WHERE id = ?1 AND " OWNER_OK " AND status = 'queued'",
@@ -332,13 +345,23 @@ static int run_done(job_store *s, sqlite3_stmt *q, const char *what)
     return JS_OK;
 }
 
-int job_store_recover(job_store *s, int *requeued, int *cancelled)
+int job_store_recover(job_store *s, int *requeued, int *cancelled, int *failed)
 {
     char now[32];
     util_now_iso(now);
     char sql[512];
     pthread_mutex_lock(&s->mu);
-    int rc = exec(s, "UPDATE jobs SET status = 'queued', started_at = NULL, progress = NULL "
+    /* A job the daemon died in JS_MAX_CRASHES times is likely what kills it (a driver fault,
+     * memory): running it again on every restart would keep the service in a crash loop. */
+    snprintf(sql, sizeof sql,
+             "UPDATE jobs SET status = 'failed', finished_at = '%s', error = 'polydemd stopped "
+             "unexpectedly (a crash or kill -9) while running this job %d times; not retried' "
+             "WHERE status = 'running' AND cancel_requested = 0 AND attempts >= %d",
+             now, JS_MAX_CRASHES, JS_MAX_CRASHES);
+    int rc = exec(s, sql);
+    *failed = rc ? 0 : sqlite3_changes(s->db);
+    if (!rc)
+        rc = exec(s, "UPDATE jobs SET status = 'queued', started_at = NULL, progress = NULL "
                      "WHERE status = 'running' AND cancel_requested = 0");
     *requeued = rc ? 0 : sqlite3_changes(s->db);
     snprintf(sql, sizeof sql,
@@ -480,7 +503,7 @@ int job_store_list(job_store *s, const char *status, const char *tag, const char
     sqlite3_int64 after_seq = 0;
     pthread_mutex_lock(&s->mu);
     if (after) {
-        sqlite3_stmt *q = stmt(s, S_SEQ_OF);
+        sqlite3_stmt *q = stmt(s, S_CURSOR);
         bind_text(q, 1, after);
         bind_text(q, 2, owner);
         int r = sqlite3_step(q);

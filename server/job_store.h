@@ -50,8 +50,10 @@ typedef struct job_store job_store;
 int job_store_open(const char *path, job_store **out, char *msg, size_t msglen);
 void job_store_close(job_store *st);
 
-/* After a crash: jobs left running go back to queued (or to cancelled when a cancel was asked). */
-int job_store_recover(job_store *st, int *requeued, int *cancelled);
+/* After a crash: jobs left running go back to queued (or to cancelled when a cancel was asked,
+ * or to failed when the daemon has now died in them JS_MAX_CRASHES times). */
+#define JS_MAX_CRASHES 3
+int job_store_recover(job_store *st, int *requeued, int *cancelled, int *failed);
 
 /*
  * Inserts job j (id, owner, name, tags, priority, created_at) with its scenario text. With an

@@ -169,11 +169,13 @@ int main(int argc, char **argv)
         fprintf(stderr, "polydemd: database: %s\n", msg);
         goto out;
     }
-    int requeued = 0, cancelled = 0;
-    if (job_store_recover(a.st, &requeued, &cancelled) != JS_OK) goto out;
-    if (requeued || cancelled)
-        fprintf(stderr, "polydemd: recovered after a crash: %d job(s) queued again, %d cancelled\n",
-                requeued, cancelled);
+    int requeued = 0, cancelled = 0, failed = 0;
+    if (job_store_recover(a.st, &requeued, &cancelled, &failed) != JS_OK) goto out;
+    if (requeued || cancelled || failed)
+        fprintf(stderr,
+                "polydemd: recovered after a crash: %d job(s) queued again, %d cancelled, %d "
+                "failed (the daemon had died in them %d times)\n",
+                requeued, cancelled, failed, JS_MAX_CRASHES);
     sweep(a.st, a.results_dir, a.meshes_dir);
     static const char *const dash[] = {"../clients/dashboard", "../../clients/dashboard",
                                        "../share/polydem/dashboard"};

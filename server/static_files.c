@@ -104,6 +104,8 @@ enum MHD_Result files_send(http_req *r, const char *path, const char *type, cons
         int e = errno;
         if (fd >= 0) close(fd);
         if (fd < 0 && e == ENOENT) return http_error(r, 404, "not_found", "no such file");
+        if (fd >= 0) /* a directory or other non-file: nothing to serve, not a storage fault */
+            return http_error(r, 404, "not_found", "%.200s is not a file", r->url);
         return http_error(r, 500, "storage", "cannot read the file");
     }
     char etag[96], crange[96], disp[160];

@@ -133,5 +133,43 @@ expect_fail invalid_scenario 1 "/time/dt" -- $POLYDEM run "$tmp/bad.json" -o "$t
 expect_fail unwritable_output 1 "/nonexistent/dir/x.h5" -- $POLYDEM run "$tmp/drop.json" -o /nonexistent/dir/x.h5
 if [ ! -e "$tmp/x.h5" ] && [ ! -e "$tmp/x.h5.partial" ]; then ok no_result_after_errors; else bad no_result_after_errors "$(ls "$tmp")"; fi
 
+# -o must never destroy what the scenario was read from: the scenario itself (also through a
+# symbolic link, or as the .xmf written beside the result) and its mesh files; each is refused
+# before any work and left as it was
+mkdir "$tmp/in"
+cp "$tmp/drop.json" "$tmp/in/self.json"
+expect_fail output_is_scenario 1 "would overwrite" -- $POLYDEM run "$tmp/in/self.json" -o "$tmp/in/self.json"
+ln -s self.json "$tmp/in/link.h5"
+expect_fail output_links_to_scenario 1 "would overwrite" -- $POLYDEM run "$tmp/in/self.json" -o "$tmp/in/link.h5"
+cp "$tmp/drop.json" "$tmp/in/r.h5.xmf"
+expect_fail output_xmf_is_scenario 1 "would overwrite" -- $POLYDEM run "$tmp/in/r.h5.xmf" -o "$tmp/in/r.h5"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n' >"$tmp/in/tet.obj"
+sed 's/"s": {"builtin": "schonhardt"}/"s": {"mesh": "tet.obj"}/' "$tmp/drop.json" >"$tmp/in/tet.json"
+expect_fail output_is_mesh 1 "tet.obj" -- $POLYDEM run "$tmp/in/tet.json" -o "$tmp/in/tet.obj"
+if cmp -s "$tmp/drop.json" "$tmp/in/self.json" && cmp -s "$tmp/drop.json" "$tmp/in/r.h5.xmf" &&
+    [ "$(head -c 7 "$tmp/in/tet.obj")" = "v 0 0 0" ] && [ ! -e "$tmp/in/r.h5" ]; then
+    ok inputs_left_intact
+else bad inputs_left_intact "$(ls -l "$tmp/in")"; fi
+mkdir "$tmp/outdir"
+expect_fail output_is_directory 1 "is a directory" -- $POLYDEM run "$tmp/drop.json" -o "$tmp/outdir"
+
+# two runs writing the same result: the second is refused and leaves the first's file alone (it
+# used to truncate the first's .partial, then remove it on its own failure)
+$POLYDEM run "$tmp/long.json" -o "$tmp/same.h5" >"$tmp/out1" 2>"$tmp/err1" &
+pid=$!
+i=0
+while [ ! -e "$tmp/same.h5.partial" ] && [ $i -lt 600 ]; do sleep 0.1; i=$((i + 1)); done
+sleep 0.5
+expect_fail second_run_same_output 1 "another run is writing" -- $POLYDEM run "$tmp/drop.json" -o "$tmp/same.h5"
+partial_kept=0
+[ -s "$tmp/same.h5.partial" ] && partial_kept=1
+kill -INT "$pid"
+wait "$pid"
+rc=$?
+st=$(h5dump -a /status "$tmp/same.h5" 2>&1 | sed -n 's/^ *(0): "\(.*\)"$/\1/p')
+if [ "$partial_kept" -eq 1 ] && [ "$rc" -eq 130 ] && [ "$st" = cancelled ]; then
+    ok first_run_keeps_its_result
+else bad first_run_keeps_its_result "partial kept $partial_kept, exit $rc, status '$st': $(cat "$tmp/err1")"; fi
+
 echo "$passed passed, $failed failed"
 [ "$failed" -eq 0 ]

@@ -278,6 +278,14 @@ for p in /vendor/three/../../../../etc/passwd /vendor/three/%2e%2e/%2e%2e/%2e%2e
 done
 code=$(req POST /index.html)
 check static_post_405 405 "$code"
+sub=""
+for d in /usr/share/javascript/three/*/; do [ -d "$d" ] && sub=$(basename "$d") && break; done
+if [ -n "$sub" ]; then
+    code=$(req GET "/vendor/three/$sub")
+    check static_directory_404 "404 not_found" "$code $(jstr code)"
+else bad static_directory_404 "no directory under /usr/share/javascript/three to ask for"; fi
+code=$(req "$(printf 'GE\303')" /healthz)
+check bad_utf8_method_405_json "405 method_not_allowed" "$code $(jstr code)"
 
 # ---- metrics
 code=$(req GET /metrics)
@@ -333,6 +341,37 @@ check events_token_query "200" "$(head -c 3 "$tmp/ev.txt" >/dev/null; echo "$cod
 check events_token_query_data queued "$(sed -n 's/^data: .*"status":"\([a-z]*\)".*/\1/p' "$tmp/ev.txt" | head -n 1)"
 code=$(req GET "/v1/jobs/$aid/events?token=bob-0123456789abcdef")
 check events_other_token_404 404 "$code"
+# the token is needed however the path is spelt: "//v1/..." and "/%2Fv1/..." reach the same
+# routes (they used to skip the check, and with no owner saw and deleted everyone's jobs)
+for p in //v1/jobs /%2Fv1/jobs "///v1/jobs/$aid" "//v1/jobs/$aid/scenario" //v1/events; do
+    code=$(req GET "$p" --path-as-is --max-time 2)
+    check "spelt_path_needs_token_$p" 401 "$code"
+done
+code=$(req DELETE "//v1/jobs/$aid" --path-as-is)
+check spelt_path_delete_needs_token 401 "$code"
+code=$(req POST //v1/jobs --path-as-is --data-binary @"$tmp/quick.json")
+check spelt_path_submit_needs_token 401 "$code"
+# a web page of another site cannot submit through the user's browser (its Origin differs);
+# the dashboard's own requests carry this server's host and pass
+code=$(req POST /v1/jobs --data-binary @"$tmp/quick.json" -H "$A" -H 'Origin: http://evil.example' -H 'Content-Type: text/plain')
+check foreign_origin_403 "403 cross_origin" "$code $(jstr code)"
+code=$(req POST /v1/jobs --data-binary @"$tmp/quick.json" -H "$A" -H "Origin: $URL")
+aid2=$(jstr id)
+check same_origin_201 201 "$code"
+code=$(req POST /v1/jobs --data-binary @"$tmp/quick.json" -H "$A")
+aid3=$(jstr id)
+# a page cursor stays valid when its job is deleted (list, delete the page, fetch the next)
+for j in "$aid" "$aid2" "$aid3"; do req POST "/v1/jobs/$j/cancel" -H "$A" >/dev/null; done
+code=$(req GET '/v1/jobs?status=cancelled&limit=1' -H "$A")
+check cursor_page_1 "200 $aid3 next=$aid3" "$code $(jall id) next=$(jstr next)"
+code=$(req DELETE "/v1/jobs/$aid3" -H "$A")
+check cursor_job_deleted 204 "$code"
+code=$(req GET "/v1/jobs?status=cancelled&limit=1&after=$aid3" -H "$A")
+check cursor_after_deleted_job "200 $aid2" "$code $(jall id)"
+code=$(req GET "/v1/jobs?status=cancelled&after=$aid3" -H "$B")
+check cursor_of_another_owner_400 400 "$code"
+code=$(req DELETE "/v1/jobs/$aid3" -H "$A")
+check deleted_job_is_gone_404 404 "$code"
 stop_daemon TERM
 
 # ---- the example config of deploy/ is one this daemon reads (flags override its paths)

@@ -113,6 +113,19 @@ check crashed_job_succeeds succeeded "$(wait_status "$l3" succeeded 60)"
 code=$(req GET "/v1/jobs/$l3/result")
 check crashed_job_result_200 200 "$code"
 check no_partial_files 0 "$(ls "$data/results" | grep -c 'partial$')"
+
+# ---- a job the daemon dies in three times is failed, not run a fourth time (a crash loop);
+#      shutdown requeues do not count (l2 above was requeued by SIGTERM and then succeeded)
+l4=$(submit tests/server/long_job.json)
+for k in 1 2 3; do
+    wait_progress "$l4" || bad "long_job_4_runs_$k" "$(cat "$tmp/wp.json")"
+    stop_daemon KILL
+    start_daemon "$data" --no-selftest --config "$tmp/fast.conf" || { summary; exit 1; }
+done
+code=$(req GET "/v1/jobs/$l4")
+check thrice_crashed_job_failed "200 failed" "$code $(jstr status)"
+check thrice_crashed_job_says_why true "$(jstr error | grep -q 'while running this job 3 times' && echo true)"
+check thrice_crashed_logged true "$(grep -q '1 failed' "$LOG" && echo true)"
 stop_daemon TERM && ok sigterm_idle_exit_0
 
 summary

@@ -80,6 +80,59 @@ TEST(generated_group_fits_without_overlaps)
     }
 }
 
+/* Regions with room for more than 1e9 particles (fine grains in a large box, a long thin
+ * floor): a lattice just large enough, centred, holds them (this used to be refused as "do not
+ * fit", an overflowing cell count). */
+TEST(huge_regions_hold_their_groups)
+{
+    const char *cases[][2] = {
+        {"lattice", "\"min\": [0, 0, 0], \"max\": [2, 2, 2]"},
+        {"random", "\"min\": [0, 0, 0], \"max\": [2, 2, 2]"},
+        {"lattice", "\"min\": [-5e4, -5e4, 0], \"max\": [5e4, 5e4, 0.003]"},
+        {"random", "\"min\": [-5e4, -5e4, 0], \"max\": [5e4, 5e4, 0.003]"},
+    };
+    for (int c = 0; c < 4; c++) {
+        char g[512];
+        snprintf(g, sizeof g,
+                 "{\"shape\": \"c\", \"material\": \"rock\", \"count\": 1000, \"arrangement\": "
+                 "\"%s\", \"size\": 0.001, \"region\": {%s}}",
+                 cases[c][0], cases[c][1]);
+        pd_scenario *s = parse(g, 3);
+        sc_particles *p = make(s);
+        CHECK(p != NULL);
+        if (!p) {
+            pd_scenario_destroy(s);
+            continue;
+        }
+        CHECK_EQ_INT(1000, p->n);
+        const sc_group *gr = &s->group[0];
+        double r = s->shape[2].radius_ratio * 0.001, mid[3] = {0, 0, 0};
+        int inside = 1, apart = 1;
+        for (long i = 0; i < p->n; i++) {
+            for (int k = 0; k < 3; k++) {
+                double x = p->x[3 * i + k];
+                inside &= x - r >= gr->region_min[k] - 1e-12 && x + r <= gr->region_max[k] + 1e-12;
+                mid[k] += x / (double)p->n;
+            }
+            for (long j = 0; j < i; j++) {
+                double d2 = 0;
+                for (int k = 0; k < 3; k++) {
+                    double t = p->x[3 * i + k] - p->x[3 * j + k];
+                    d2 += t * t;
+                }
+                apart &= d2 >= 4 * r * r * (1 - 1e-12);
+            }
+        }
+        CHECK(inside);
+        CHECK(apart);
+        /* near the region's centre: within the block's own size (1000 cells of 2r) */
+        for (int k = 0; k < 3; k++)
+            CHECK(fabs(mid[k] - 0.5 * (gr->region_min[k] + gr->region_max[k])) < 40 * r);
+        pd_scenario_destroy(s);
+        sc_particles_destroy(p);
+    }
+}
+
 TEST(size_distributions)
 {
     /* uniform on [a, b]: mean (a+b)/2, sd (b-a)/sqrt(12); normal with bounds at +-5 sd: mean and
@@ -197,6 +250,7 @@ TEST(listed_particles_mass_and_inertia)
 int main(void)
 {
     RUN(generated_group_fits_without_overlaps);
+    RUN(huge_regions_hold_their_groups);
     RUN(size_distributions);
     RUN(random_orientations_are_uniform_unit_quaternions);
     RUN(same_seed_same_state_other_seed_other_state);

@@ -259,6 +259,101 @@ TEST(errors_name_the_field)
                  "/interactions/0/cohesion_range", "required");
 }
 
+/* What `validate` used to pass and `run` then refused or ran into NaN (a QA pass, 2026-12-02). */
+TEST(validate_refuses_what_run_cannot_do)
+{
+    /* shape and wall names name HDF5 groups of the result */
+    expect_error(BASE_HEAD "\"walls\": [{\"name\": \".\", \"material\": \"rock\", \"box\": "
+                           "{\"min\": [-1,-1,-1], \"max\": [1,1,-0.5]}}]," BASE_GROUP,
+                 "/walls/0/name", "cannot name a group");
+    expect_error(BASE_HEAD "\"walls\": [{\"name\": \"\", \"material\": \"rock\", \"box\": "
+                           "{\"min\": [-1,-1,-1], \"max\": [1,1,-0.5]}}]," BASE_GROUP,
+                 "/walls/0/name", "must not be empty");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"a/b\": {\"builtin\": \"schonhardt\"}},"
+                 "\"particles\": [{\"shape\": \"a/b\", \"material\": \"rock\", \"count\": 1,"
+                 " \"size\": 0.01, \"region\": {\"min\": [0,0,0], \"max\": [1,1,1]}}]}",
+                 "/shapes/a~1b", "no '/'");
+    /* 63 characters is the limit in characters, as the schema's maxLength counts: 60 two-byte
+     * ones pass (120 bytes), 64 one-byte ones do not */
+    {
+        char text[2048], name[256] = "", *q = name;
+        for (int i = 0; i < 60; i++)
+            q += sprintf(q, "\xc3\xa9"); /* e acute */
+        snprintf(text, sizeof text,
+                 BASE_HEAD "\"walls\": [{\"name\": \"%s\", \"material\": \"rock\", \"box\": "
+                           "{\"min\": [-1,-1,-1], \"max\": [1,1,-0.5]}}]," BASE_GROUP,
+                 name);
+        pd_diags d;
+        pd_scenario *sc = parse(text, &d);
+        CHECK(sc != NULL);
+        pd_scenario_destroy(sc);
+        pd_diags_free(&d);
+        memset(name, 'w', 64);
+        name[64] = 0;
+        snprintf(text, sizeof text,
+                 BASE_HEAD "\"walls\": [{\"name\": \"%s\", \"material\": \"rock\", \"box\": "
+                           "{\"min\": [-1,-1,-1], \"max\": [1,1,-0.5]}}]," BASE_GROUP,
+                 name);
+        expect_error(text, "/walls/0/name", "longer than 63 characters");
+    }
+    /* the schema's types: a sphere is {}, builtin counts and seeds are integers, a seed is a
+     * rock's */
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"sphere\": {\"r\": 1}}}," BASE_GROUP,
+                 "/shapes/s/sphere", "must be {}");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"rock\", \"triangles\": 40.5}}," BASE_GROUP,
+                 "/shapes/s/triangles", "must be an integer");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"rock\", \"seed\": 1e30}}," BASE_GROUP,
+                 "/shapes/s/seed", "must be an integer");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"cube\", \"seed\": 3}}," BASE_GROUP,
+                 "/shapes/s/seed", "only a \"rock\"");
+    /* a run shorter than one step */
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 1e-7},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/time/duration", "shorter than one time step");
+    /* a region whose extent overflows */
+    expect_error(BASE_HEAD "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", "
+                           "\"count\": 1, \"size\": 0.01, \"region\": {\"min\": [-1e308,0,0], "
+                           "\"max\": [1e308,1,1]}}]}",
+                 "/particles/0/region", "overflows");
+    /* masses beyond double precision, cohesion wider than the particles, drag faster than dt */
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01, \"output_interval\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 1e308, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/particles/0", "beyond what double precision holds");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"], \"cohesion\": 10, "
+                 "\"cohesion_range\": 1e308}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/interactions/0/cohesion_range", "wider than the largest particle");
+    /* tau = rho d^2 / (18 mu) = 2600 * 1e-4 / (18 * 1e3) = 1.4e-5 s at mu = 1e3 Pa s (pitch),
+     * below dt = 1e-4 s, which the contact estimate allows for these soft particles (E = 2e3) */
+    expect_error("{\"time\": {\"dt\": 1e-4, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e3}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"fluid\": {\"viscosity\": 1e3},"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/time/dt", "Stokes relaxation time");
+}
+
 /* An empty object is invalid input, reported field by field, not an allocation failure. */
 TEST(empty_scenario_is_invalid_not_out_of_memory)
 {
@@ -369,6 +464,7 @@ int main(void)
     RUN(issue_example_parses_with_defaults);
     RUN(defaults);
     RUN(errors_name_the_field);
+    RUN(validate_refuses_what_run_cannot_do);
     RUN(every_error_is_reported);
     RUN(empty_scenario_is_invalid_not_out_of_memory);
     RUN(unstable_dt_is_refused_with_the_estimate);
