@@ -20,6 +20,7 @@
 #include <string.h>
 #include <sys/file.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 /* Takes the data directory's lock file: one daemon per data directory. fd, or -1. */
@@ -212,6 +213,10 @@ int main(int argc, char **argv)
     http_quiesce(d);
     worker_stop(a.w); /* the running job stops at a safe point and is queued again */
     sse_close_all(a.hub);
+    /* Let the ended event streams send what they hold (the final status events) and close
+     * cleanly before MHD drops every connection; a client that reads nothing costs 2 s at most. */
+    for (int i = 0; i < 200 && sse_count(a.hub) > 0; i++)
+        nanosleep(&(struct timespec){0, 10000000}, NULL);
     MHD_stop_daemon(d);
     rc = 0;
     fprintf(stderr, "polydemd: stopped\n");

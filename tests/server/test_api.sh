@@ -308,7 +308,16 @@ check idempotent_retry_when_full "200 $idem" "$code $(jstr id)"
 # ---- a second daemon on the same data is refused; SIGTERM; a restart finds the jobs
 "$POLYDEMD_BIN" --listen 127.0.0.1:0 --data "$tmp/data" --device 99 >"$tmp/second.log" 2>&1
 check second_daemon_refused "1 locked" "$? $(grep -o 'locked' "$tmp/second.log")"
+# event streams open at SIGTERM end cleanly (curl exit 0), not cut off (18) by the stop
+sse_pids=""
+for k in 1 2 3 4 5 6; do
+    (curl -s -N --max-time 20 -o /dev/null "$URL/v1/events"; echo "$?" >"$tmp/sse_rc.$k") &
+    sse_pids="$sse_pids $!"
+done
+sleep 1
 stop_daemon TERM && ok sigterm_exit_0
+for p in $sse_pids; do wait "$p"; done
+check sse_streams_end_cleanly_at_sigterm "0 0 0 0 0 0" "$(cat "$tmp"/sse_rc.* | tr '\n' ' ' | sed 's/ $//')"
 start_daemon "$tmp/data" --device 99 || { summary; exit 1; }
 code=$(req GET '/v1/jobs?status=queued&limit=1000')
 check restart_keeps_jobs "200 8" "$code $(jall id | tr , '\n' | wc -l)"
