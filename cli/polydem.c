@@ -93,6 +93,21 @@ static int parse_pose(const char *flag, const char *s, pd_pose *pose)
     return 0;
 }
 
+/* Writes s as a JSON string literal (quotes and control characters escaped). */
+static void json_str(const char *s)
+{
+    putchar('"');
+    for (; *s; s++) {
+        if (*s == '"' || *s == '\\')
+            printf("\\%c", *s);
+        else if ((unsigned char)*s < 0x20)
+            printf("\\u%04x", *s);
+        else
+            putchar(*s);
+    }
+    putchar('"');
+}
+
 static void print_vec(const char *key, const double *v, int last)
 {
     printf("\"%s\": [%.17g, %.17g, %.17g]%s", key, v[0], v[1], v[2], last ? "" : ", ");
@@ -201,8 +216,9 @@ static int cmd_mesh_info(int argc, char **argv)
             lo[k] = v < lo[k] ? v : lo[k];
             hi[k] = v > hi[k] ? v : hi[k];
         }
-    printf("{\"mesh\": \"%s\", \"triangles\": %d, \"vertices\": %d, \"closed\": true, ", argv[2],
-           m->ntris, m->nverts);
+    printf("{\"mesh\": ");
+    json_str(argv[2]);
+    printf(", \"triangles\": %d, \"vertices\": %d, \"closed\": true, ", m->ntris, m->nverts);
     printf("\"volume\": %.17g, ", mp.volume);
     printf("\"equivalent_diameter\": %.17g, ", cbrt(6.0 * mp.volume / 3.14159265358979323846));
     print_vec("centroid", mp.centroid, 0);
@@ -224,21 +240,6 @@ static int cmd_mesh_info(int argc, char **argv)
            "\"inertia\": \"kg m^2 at density 1 kg/m^3\"}}\n");
     pd_mesh_destroy(m);
     return 0;
-}
-
-/* Writes s as a JSON string literal (quotes and control characters escaped). */
-static void json_str(const char *s)
-{
-    putchar('"');
-    for (; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            printf("\\%c", *s);
-        else if ((unsigned char)*s < 0x20)
-            printf("\\u%04x", *s);
-        else
-            putchar(*s);
-    }
-    putchar('"');
 }
 
 static int cmd_validate(int argc, char **argv)

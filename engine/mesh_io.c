@@ -338,11 +338,81 @@ static int obj_corner(const char *label, int lineno, const char *tok, size_t tl,
     return PD_OK;
 }
 
+/*
+ * Triangulates an OBJ face of np > 3 corners (vertex indices into verts) into np - 2 triangles at
+ * out, keeping its orientation. A strictly convex face is fanned from its first corner, as it
+ * always was; any other (an L-shaped cap, a corner on a straight edge) is cut into ears in the
+ * plane it faces most, since a fan would fold it over itself or leave a zero-area triangle.
+ * Returns -1 when no ear can be cut (a self-crossing or degenerate face). scratch holds 3 np.
+ */
+static int obj_polygon(const double *verts, const int *poly, size_t np, int *out, double *scratch)
+{
+    double n[3] = {0, 0, 0}; /* Newell's normal */
+    for (size_t k = 0; k < np; k++) {
+        const double *a = &verts[3 * (size_t)poly[k]], *b = &verts[3 * (size_t)poly[(k + 1) % np]];
+        n[0] += (a[1] - b[1]) * (a[2] + b[2]);
+        n[1] += (a[2] - b[2]) * (a[0] + b[0]);
+        n[2] += (a[0] - b[0]) * (a[1] + b[1]);
+    }
+    int ax = fabs(n[0]) > fabs(n[1]) ? (fabs(n[0]) > fabs(n[2]) ? 0 : 2)
+                                     : (fabs(n[1]) > fabs(n[2]) ? 1 : 2);
+    int u = (ax + 1) % 3, v = (ax + 2) % 3; /* counter-clockwise seen along +n[ax] */
+    double sgn = n[ax] < 0 ? -1 : 1;
+    double *x = scratch, *y = scratch + np;
+    int *idx = (int *)(void *)(scratch + 2 * np); /* np ints fit in np doubles */
+    for (size_t k = 0; k < np; k++) {
+        x[k] = verts[3 * (size_t)poly[k] + u];
+        y[k] = sgn * verts[3 * (size_t)poly[k] + v];
+        idx[k] = (int)k;
+    }
+#define TURN(i, j, k) ((x[j] - x[i]) * (y[k] - y[i]) - (y[j] - y[i]) * (x[k] - x[i]))
+    int convex = 1;
+    for (size_t k = 0; k < np && convex; k++)
+        convex = TURN(k, (k + 1) % np, (k + 2) % np) > 0;
+    size_t nt = 0;
+    if (convex) {
+        for (size_t k = 1; k + 1 < np; k++, nt++) {
+            out[3 * nt] = poly[0];
+            out[3 * nt + 1] = poly[k];
+            out[3 * nt + 2] = poly[k + 1];
+        }
+        return 0;
+    }
+    size_t m = np;
+    while (m > 3) {
+        size_t cut = m;
+        for (size_t e = 0; e < m && cut == m; e++) {
+            int a = idx[(e + m - 1) % m], b = idx[e], c = idx[(e + 1) % m];
+            if (!(TURN(a, b, c) > 0)) continue; /* reflex or straight: not an ear */
+            int clear = 1;                      /* no other corner in or on the ear */
+            for (size_t q = 0; q < m && clear; q++) {
+                int d = idx[q];
+                if (d == a || d == b || d == c) continue;
+                clear = !(TURN(a, b, d) >= 0 && TURN(b, c, d) >= 0 && TURN(c, a, d) >= 0);
+            }
+            if (clear) cut = e;
+        }
+        if (cut == m) return -1;
+        out[3 * nt] = poly[idx[(cut + m - 1) % m]];
+        out[3 * nt + 1] = poly[idx[cut]];
+        out[3 * nt + 2] = poly[idx[(cut + 1) % m]];
+        nt++;
+        memmove(&idx[cut], &idx[cut + 1], sizeof *idx * (m - cut - 1));
+        m--;
+    }
+    if (!(TURN(idx[0], idx[1], idx[2]) > 0)) return -1;
+    out[3 * nt] = poly[idx[0]];
+    out[3 * nt + 1] = poly[idx[1]];
+    out[3 * nt + 2] = poly[idx[2]];
+#undef TURN
+    return 0;
+}
+
 static int parse_obj(const char *label, const char *buf, size_t len, pd_mesh **out, pd_error *err)
 {
-    double *verts = NULL;
+    double *verts = NULL, *pscratch = NULL;
     int *tris = NULL, *poly = NULL;
-    size_t vcap = 0, tcap = 0, pcap = 0, nv = 0, nt = 0;
+    size_t vcap = 0, tcap = 0, pcap = 0, scap = 0, nv = 0, nt = 0;
     int lineno = 0, rc = PD_OK;
     const char *pos = buf, *end = buf + len;
     while (pos < end) {
@@ -384,13 +454,20 @@ static int parse_obj(const char *label, const char *buf, size_t len, pd_mesh **o
                                   label, lineno, MESH_MAX_TRIS);
                 goto fail;
             }
-            /* Fan from the first corner: exact for the convex polygons OBJ exporters write. */
             if (grow((void **)&tris, &tcap, 3 * (nt + np - 2), sizeof *tris)) goto oom;
-            for (size_t k = 1; k + 1 < np; k++, nt++) {
-                tris[3 * nt] = poly[0];
-                tris[3 * nt + 1] = poly[k];
-                tris[3 * nt + 2] = poly[k + 1];
+            if (np == 3) {
+                memcpy(&tris[3 * nt], poly, 3 * sizeof *poly);
+            } else {
+                if (grow((void **)&pscratch, &scap, 3 * np, sizeof *pscratch)) goto oom;
+                if (obj_polygon(verts, poly, np, &tris[3 * nt], pscratch) != 0) {
+                    rc = pd_error_set(err, PD_EMESH,
+                                      "%s:%d: face of %zu corners is not a simple polygon (its "
+                                      "edges cross, or its corners are in a line)",
+                                      label, lineno, np);
+                    goto fail;
+                }
             }
+            nt += np - 2;
         } else if (!isalpha((unsigned char)tok[0])) {
             char show[41];
             rc = pd_error_set(err, PD_EMESH, "%s:%d: not an OBJ statement: '%s'", label, lineno,
@@ -400,6 +477,7 @@ static int parse_obj(const char *label, const char *buf, size_t len, pd_mesh **o
         /* other statements (vn, vt, g, o, s, usemtl, mtllib, l, ...) carry no solid geometry */
     }
     free(poly);
+    free(pscratch);
     return mesh_finish(verts, (int)nv, tris, (int)nt, label, out, err);
 oom:
     rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory", label);
@@ -407,6 +485,7 @@ fail:
     free(verts);
     free(tris);
     free(poly);
+    free(pscratch);
     return rc;
 }
 
@@ -456,15 +535,23 @@ int pd_mesh_load(const char *path, pd_mesh **out, pd_error *err)
         free(buf);
         return pd_error_set(err, PD_EMESH, "%s: empty file, no triangles", path);
     }
-    switch (detect_format(path, buf, len)) {
+    /* a text file may start with a UTF-8 byte order mark (Windows editors write one); a binary
+     * STL is recognised by its size first, so its header's bytes are never taken for one */
+    size_t bom = len >= 3 && !memcmp(buf, "\xEF\xBB\xBF", 3) ? 3 : 0;
+    int fmt = detect_format(path, buf, len);
+    if (bom && !(len >= 84 && 84 + 50 * (size_t)get_le32((const unsigned char *)buf + 80) == len))
+        fmt = detect_format(path, buf + bom, len - bom);
+    else
+        bom = 0;
+    switch (fmt) {
     case FMT_STL_BINARY:
         rc = parse_stl_binary(path, (const unsigned char *)buf, len, out, err);
         break;
     case FMT_STL_ASCII:
-        rc = parse_stl_ascii(path, buf, len, out, err);
+        rc = parse_stl_ascii(path, buf + bom, len - bom, out, err);
         break;
     case FMT_OBJ:
-        rc = parse_obj(path, buf, len, out, err);
+        rc = parse_obj(path, buf + bom, len - bom, out, err);
         break;
     default:
         rc = pd_error_set(err, PD_EMESH,

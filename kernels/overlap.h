@@ -53,6 +53,7 @@ PD_FN void ovl_cusp(ovl_ctx *c, pd_v3 p, pd_v3 t, pd_v3 n, pd_v3 nu, int on_b)
         c->area_b = v3_add(c->area_b, v3_scale(nu, area));
     else
         c->area_a = v3_add(c->area_a, v3_scale(nu, area));
+    c->area_abs += PD_FABS(area);
 }
 
 /*
@@ -586,6 +587,7 @@ PD_FN void ovl_pass(ovl_ctx *c)
     int open_b = (c->in->flags & OVL_OPEN_B) != 0;
     c->vol = c->vol_abs = PD_R(0);
     c->moment = c->area_a = c->area_b = v3(0, 0, 0);
+    c->area_abs = PD_R(0);
     c->origin_in_b = -1; /* its ties follow c->flip */
     c->inode = 0;
     c->rec = c->places && !c->flip && !c->depth_mode;
@@ -726,8 +728,8 @@ PD_FN void ovl_out_store(PD_GLOBAL pd_real *r, const ovl_out *o)
 
 /* The cusp sums of one configuration: both of a degenerate one's passes averaged. */
 typedef struct ovl_sums {
-    pd_real vol, vol_abs, smag;
-    pd_v3 mom, sdiff; /* mom about A's frame origin */
+    pd_real vol, vol_abs, smag; /* smag: the sum of |area| its terms came from */
+    pd_v3 mom, sdiff;           /* mom about A's frame origin */
 } ovl_sums;
 
 /* Sums the cusps about c->origin (c->flip must be 0; c->degenerate is set by the first pass). */
@@ -738,7 +740,7 @@ PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
     s->vol_abs = c->vol_abs;
     s->mom = c->moment;
     s->sdiff = v3_sub(c->area_a, c->area_b);
-    s->smag = v3_norm(s->sdiff);
+    s->smag = c->area_abs;
     if (c->degenerate) {
         /* coplanar faces may have been owned by one side only: repeat with -w and average */
         int store = c->store_pts;
@@ -749,7 +751,7 @@ PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
         s->vol = PD_R(0.5) * (s->vol + c->vol);
         s->vol_abs = pd_max(s->vol_abs, c->vol_abs);
         s->mom = v3_scale(v3_add(s->mom, c->moment), PD_R(0.5));
-        s->smag = PD_R(0.5) * (s->smag + v3_norm(s2));
+        s->smag = PD_R(0.5) * (s->smag + c->area_abs);
         s->sdiff = v3_scale(v3_add(s->sdiff, s2), PD_R(0.5));
         c->flip = 0;
         c->store_pts = store;
@@ -1335,8 +1337,10 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     o->volume = vol;
     o->centroid = v3_scale(mom, PD_R(1) / vol);
     /* eq. 4.19 from both sides: A's faces inside B minus B's faces inside A (equal and opposite
-     * in exact arithmetic; faces shared by both cancel). Coincident shapes have no direction at
-     * all: fall back to the centre line, then to +z. */
+     * in exact arithmetic; faces shared by both cancel). Where one solid lies wholly inside the
+     * other, the faces inside form a closed surface and the sum is rounding noise against its
+     * terms (coincident shapes have none at all): fall back to the centre line, then to +z, so
+     * the normal is still deterministic and opposite when A and B swap. */
     pd_real sn = v3_norm(sdiff);
     o->area = PD_R(0.5) * sn;
     if (sn > PD_R(1000) * PD_EPS * smag)

@@ -245,10 +245,11 @@ typedef struct ovl_ctx {
     /* cusp sums, about `origin` (A's frame origin, or the nodes' centre when re-summed) */
     pd_v3 origin;
     pd_real vol;
-    pd_real vol_abs; /* sum of the cusps' |volume|: what vol's rounding is relative to */
-    pd_v3 moment;    /* first moment of volume */
-    pd_v3 area_a;    /* sum of area * outward normal over A's faces inside B */
-    pd_v3 area_b;    /* the same over B's faces inside A */
+    pd_real vol_abs;  /* sum of the cusps' |volume|: what vol's rounding is relative to */
+    pd_v3 moment;     /* first moment of volume */
+    pd_real area_abs; /* sum of |area| over every cusp: the scale of area_a - area_b's terms */
+    pd_v3 area_a;     /* sum of area * outward normal over A's faces inside B */
+    pd_v3 area_b;     /* the same over B's faces inside A */
     /* depth mode: project nodes on n instead of storing them */
     int depth_mode;
     pd_v3 n;

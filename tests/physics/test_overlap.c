@@ -283,6 +283,33 @@ TEST(identical_coincident_shapes)
     }
 }
 
+/* One solid wholly inside the other: the faces inside form a closed surface, eq. 4.19's sum is
+ * rounding noise, and the normal used to point anywhere (QA 2026-12-02: [-0.44, -0.87, -0.22]
+ * one way and [-0.58, 0.58, 0.58] the other). It is the centre line from A's frame origin to
+ * B's: here the cubes' centres, (0.1, 0.05, 0) / |.|, and opposite when they swap. */
+TEST(contained_solid_takes_the_centre_line)
+{
+    pd_mesh *big = builtin("cube", 0), *small = box(-0.1, -0.1, -0.1, 0.1, 0.1, 0.1);
+    pd_pose pb = pose(0.1, 0.05, 0, 1, 0, 0, 0);
+    double n = sqrt(0.1 * 0.1 + 0.05 * 0.05), e[3] = {0.1 / n, 0.05 / n, 0};
+    for (int single = 0; single < 2; single++) {
+        int fl = single ? PD_OVERLAP_SINGLE : 0;
+        double tol = single ? 1e-6 : 1e-12;
+        pd_contact ab = overlap(big, ORIGIN, small, pb, fl),
+                   ba = overlap(small, pb, big, ORIGIN, fl);
+        CHECK(ab.hit && ba.hit);
+        CHECK_REL(0.008, ab.volume, tol);
+        CHECK_REL(0.008, ba.volume, tol);
+        CHECK_VEC(e[0], e[1], e[2], ab.normal, tol);
+        CHECK_VEC(-e[0], -e[1], -e[2], ba.normal, tol);
+        /* the small cube's extent along the normal: 0.2 (|e_x| + |e_y|) */
+        CHECK_NEAR(0.2 * (e[0] + e[1]), ab.depth, tol);
+        CHECK_NEAR(ab.depth, ba.depth, tol);
+    }
+    pd_mesh_destroy(big);
+    pd_mesh_destroy(small);
+}
+
 TEST(edge_on_edge_crossing)
 {
     /* B = cube turned 90 degrees about x then shifted so its edges lie exactly on A's edges
@@ -964,6 +991,7 @@ int main(void)
     RUN(touching_without_overlap_is_zero);
     RUN(vertex_exactly_on_face);
     RUN(identical_coincident_shapes);
+    RUN(contained_solid_takes_the_centre_line);
     RUN(edge_on_edge_crossing);
     RUN(near_degenerate_poses_from_rounding);
     RUN(swap_gives_same_volume_and_opposite_normal);

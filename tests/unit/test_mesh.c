@@ -597,6 +597,130 @@ static void expect_reject(const double *v, int nv, const int *t, int nt, const c
     pd_mesh_destroy(m);
 }
 
+/* Two boxes in one mesh: half-extents h1 at c1 and h2 at c2; flip2 reverses the second's
+ * triangles. */
+static int two_boxes(const double h1[3], const double c1[3], const double h2[3], const double c2[3],
+                     int flip2, pd_mesh **out, pd_error *err)
+{
+    double v[16 * 3];
+    int t[24 * 3];
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++) {
+            v[3 * i + k] = c1[k] + ((i >> k & 1) ? h1[k] : -h1[k]);
+            v[3 * (8 + i) + k] = c2[k] + ((i >> k & 1) ? h2[k] : -h2[k]);
+        }
+    for (int i = 0; i < 36; i++) {
+        t[i] = cube_tris[i];
+        t[36 + i] = 8 + cube_tris[flip2 && i % 3 ? i - i % 3 + 3 - i % 3 : i];
+    }
+    return pd_mesh_from_arrays(v, 16, t, 24, "shells.stl", out, err);
+}
+
+/* Every closed shell of a file is oriented by itself (QA 2026-12-02: a reversed second part
+ * subtracted its volume and gave negative moments of inertia); a hollow's inward inner shell is
+ * kept; a solid inside a solid is refused. */
+TEST(shells_are_oriented_each)
+{
+    const double h1[3] = {0.5, 0.5, 0.5}, c1[3] = {0, 0, 0}, h2[3] = {0.25, 0.25, 0.25},
+                 c2[3] = {2.25, 0, 0};
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    CHECK_EQ_INT(PD_OK, two_boxes(h1, c1, h2, c2, 1, &m, &err));
+    if (m) {
+        pd_mass_props mp = props(m);
+        /* 1 + 0.125 m^3; centroid (0 * 1 + 2.25 * 0.125) / 1.125 = 0.25 */
+        CHECK_NEAR(1.125, mp.volume, 1e-15);
+        CHECK_NEAR(0.25, mp.centroid[0], 1e-15);
+        for (int k = 0; k < 3; k++)
+            CHECK(mp.principal[k] > 0);
+    }
+    pd_mesh_destroy(m);
+    m = NULL;
+    /* hollow: the inner box facing inward, 1 - 0.125 */
+    CHECK_EQ_INT(PD_OK, two_boxes(h1, c1, h2, c1, 1, &m, &err));
+    if (m) CHECK_NEAR(0.875, props(m).volume, 1e-15);
+    pd_mesh_destroy(m);
+    m = NULL;
+    /* the same boxes both facing out: no one meaning */
+    CHECK_EQ_INT(PD_EMESH, two_boxes(h1, c1, h2, c1, 0, &m, &err));
+    CHECK(m == NULL);
+    CHECK_STR_CONTAINS(err.msg, "shells.stl: a shell (2 of 2");
+    CHECK_STR_CONTAINS(err.msg, "lies inside another");
+}
+
+/* OBJ faces of more than three corners: convex ones fanned as always, others cut into ears (an
+ * L-shaped cap used to be fanned over itself), a corner on a straight edge no longer leaves a
+ * zero-area triangle, and a UTF-8 byte order mark is skipped. */
+TEST(obj_polygons_and_bom)
+{
+    /* an L-shaped prism, 1 high: caps of 6 corners starting at a convex one */
+    const char *l_obj = "\xEF\xBB\xBFv 2 0 0\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\nv 0 0 0\n"
+                        "v 2 0 1\nv 2 1 1\nv 1 1 1\nv 1 2 1\nv 0 2 1\nv 0 0 1\n"
+                        "f 7 8 9 10 11 12\nf 6 5 4 3 2 1\n"
+                        "f 1 2 8 7\nf 2 3 9 8\nf 3 4 10 9\nf 4 5 11 10\nf 5 6 12 11\nf 6 1 7 12\n";
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    if (pd_mesh_load(write_text("l.obj", l_obj), &m, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (m) {
+        CHECK_EQ_INT(20, m->ntris); /* 2 x 4 cap triangles, 6 x 2 sides */
+        CHECK_NEAR(3.0, props(m).volume, 1e-15);
+        /* no cap triangle folded over: each faces the way its cap does */
+        int folded = 0;
+        for (int t = 0; t < m->ntris; t++) {
+            const double *a = &m->verts[3 * m->tris[3 * t]], *b = &m->verts[3 * m->tris[3 * t + 1]],
+                         *c = &m->verts[3 * m->tris[3 * t + 2]];
+            double nz = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
+            int cap = a[2] == b[2] && b[2] == c[2];
+            if (cap && (a[2] == 1 ? nz <= 0 : nz >= 0)) folded++;
+        }
+        CHECK_EQ_INT(0, folded);
+    }
+    pd_mesh_destroy(m);
+    m = NULL;
+    /* a unit cube whose top face has a fifth corner in the middle of an edge (a T-junction with
+     * the side split in two) */
+    const char *t_obj = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\n"
+                        "v 0 1 1\nv 0.5 0 1\n"
+                        "f 1 4 3 2\nf 5 9 6 7 8\nf 1 2 6 9\nf 1 9 5\nf 2 3 7 6\nf 3 4 8 7\n"
+                        "f 4 1 5 8\n";
+    if (pd_mesh_load(write_text("t.obj", t_obj), &m, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (m) CHECK_NEAR(1.0, props(m).volume, 1e-15);
+    pd_mesh_destroy(m);
+    m = NULL;
+    /* a face whose corners are all in a line is no polygon */
+    const char *bad = "v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3 4\n";
+    CHECK(pd_mesh_load(write_text("line.obj", bad), &m, &err) == PD_EMESH);
+    CHECK_STR_CONTAINS(err.msg, "line.obj:5: face of 4 corners is not a simple polygon");
+    /* ASCII STL with a byte order mark */
+    const char *stl = "\xEF\xBB\xBFsolid t\n"
+                      "facet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 0 1 0\nvertex 1 0 0\n"
+                      "endloop\nendfacet\n"
+                      "facet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0 1\n"
+                      "endloop\nendfacet\n"
+                      "facet normal 0 0 0\nouter loop\nvertex 0 0 0\nvertex 0 0 1\nvertex 0 1 0\n"
+                      "endloop\nendfacet\n"
+                      "facet normal 0 0 0\nouter loop\nvertex 1 0 0\nvertex 0 1 0\nvertex 0 0 1\n"
+                      "endloop\nendfacet\nendsolid t\n";
+    if (pd_mesh_load(write_text("bom.stl", stl), &m, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (m) CHECK_NEAR(1.0 / 6, props(m).volume, 1e-16);
+    pd_mesh_destroy(m);
+}
+
+/* The smallest moment of a needle keeps its digits: I_xx = m (b^2 + c^2) / 12 for a box of
+ * sides 1 x b x c (was tr(C) - C_xx, 4.5e-9 relative off at b = c = 1e-4). */
+TEST(needle_inertia)
+{
+    const double h[3] = {0.5, 0.5e-4, 0.5e-4}, off[3] = {0, 0, 0};
+    pd_mesh *m = make_box(h, NULL, off);
+    CHECK(m != NULL);
+    if (!m) return;
+    pd_mass_props mp = props(m);
+    double b = 2 * h[1], vol = b * b, ixx = vol * (b * b + b * b) / 12; /* the vertices' values */
+    CHECK_NEAR(vol, mp.volume, 1e-14 * vol);
+    CHECK_NEAR(ixx, mp.inertia[0][0], 1e-12 * ixx);
+    pd_mesh_destroy(m);
+}
+
 static void cube_verts(double v[24])
 {
     for (int i = 0; i < 8; i++)
@@ -752,6 +876,9 @@ int main(void)
     RUN(obj_quads_and_negative_indices);
     RUN(inward_mesh_is_flipped);
     RUN(welding);
+    RUN(shells_are_oriented_each);
+    RUN(obj_polygons_and_bom);
+    RUN(needle_inertia);
     RUN(reject_open_mesh);
     RUN(reject_non_manifold_edge);
     RUN(reject_inconsistent_orientation);
