@@ -50,13 +50,30 @@ static double draw_size(rng *r, const sc_size *z)
     switch (z->dist) {
     case SC_SIZE_UNIFORM:
         return z->min + (z->max - z->min) * rng_unit(r);
-    case SC_SIZE_NORMAL:
-        /* truncated to [min, max] by rejection; the bounds keep at least one std of mass */
-        for (int tries = 0; tries < 1000; tries++) {
-            double d = z->mean + z->std * rng_normal(r);
-            if (d >= z->min && d <= z->max) return d;
+    case SC_SIZE_NORMAL: {
+        /* truncated to [min, max] by rejection: normal draws while [min, max] holds a fair share
+         * of the normal's mass; otherwise (a std much wider than the interval, where the normal
+         * draws almost never land and every particle used to get the mean) uniform draws over
+         * [min, max] kept with the normal's density relative to its peak there, which is exact
+         * and, for a wide std, accepts nearly all */
+        if (!(z->std > 0)) return z->mean < z->min ? z->min : z->mean > z->max ? z->max : z->mean;
+        double a = (z->min - z->mean) / z->std, b = (z->max - z->mean) / z->std;
+        double mass = 0.5 * (erfc(-b / sqrt(2.0)) - erfc(-a / sqrt(2.0)));
+        if (mass >= 0.05) {
+            for (int tries = 0; tries < 1000; tries++) {
+                double d = z->mean + z->std * rng_normal(r);
+                if (d >= z->min && d <= z->max) return d;
+            }
+        } else {
+            double peak = z->mean < z->min ? z->min : z->mean > z->max ? z->max : z->mean;
+            double hp = (peak - z->mean) / z->std;
+            for (int tries = 0; tries < 100000; tries++) {
+                double d = z->min + (z->max - z->min) * rng_unit(r), h = (d - z->mean) / z->std;
+                if (rng_unit(r) < exp(-0.5 * (h * h - hp * hp))) return d;
+            }
         }
         return z->mean < z->min ? z->min : z->mean > z->max ? z->max : z->mean;
+    }
     default:
         return z->mean;
     }

@@ -4,7 +4,8 @@
  * DEM practice (as issue 3 states it): dt must not exceed 0.3 x the Rayleigh time step of the
  * smallest particle, nor 1/20 of the shortest Hertz contact time at the scenario's initial speeds
  * plus the free-fall speed across its extent. The contact speed used is 2 v_max + sqrt(2 g h):
- * two of the fastest particles closing head-on after falling the scene's height h.
+ * two of the fastest particles closing head-on after falling the scene's height h, v_max
+ * counting a fluid's flow speed, which drag carries particles towards.
  */
 #include <math.h>
 #include <string.h>
@@ -99,6 +100,13 @@ void sc_dt_estimates(const pd_scenario *s, double *rayleigh, double *hertz, doub
             grow_box(lo, hi, g->region_min);
             grow_box(lo, hi, g->region_max);
         }
+    }
+    /* Stokes drag carries particles towards the flow's speed: they may meet one another, or a
+     * wall, at it (a flow of 1e300 m/s used to pass and diverge at the first step) */
+    if (s->has_fluid && s->fluid_viscosity > 0) {
+        const double *u = s->fluid_velocity;
+        double uf = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        vmax = uf > vmax ? uf : vmax;
     }
     for (int w = 0; w < s->nwall; w++)
         if (s->wall[w].mesh)

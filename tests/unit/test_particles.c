@@ -166,6 +166,38 @@ TEST(size_distributions)
     sc_particles_destroy(p);
 }
 
+/* A normal far wider than its bounds is, truncated, all but uniform over them: mean (a+b)/2 and
+ * sd (b-a)/sqrt(12) to 4 standard errors (QA 2026-12-02: every particle got the mean, the normal
+ * draws never landing inside). The density's own tilt across [0.01, 0.021] at std 1e10 is
+ * 1e-24 relative, far below the test's resolution. */
+TEST(wide_normal_is_uniform_over_its_bounds)
+{
+    pd_scenario *s = parse(
+        "{\"shape\": \"b\", \"material\": \"rock\", \"count\": 4000, \"size\": {\"distribution\":"
+        " \"normal\", \"mean\": 0.015, \"std\": 1e10, \"min\": 0.01, \"max\": 0.021}, "
+        "\"region\": {\"min\": [0,0,0], \"max\": [3,3,3]}}",
+        3);
+    sc_particles *p = make(s);
+    CHECK(p != NULL);
+    if (!p) {
+        pd_scenario_destroy(s);
+        return;
+    }
+    double sum = 0, sum2 = 0, mn = 1, mx = 0;
+    for (long i = 0; i < p->n; i++) {
+        sum += p->size[i];
+        sum2 += p->size[i] * p->size[i];
+        mn = p->size[i] < mn ? p->size[i] : mn;
+        mx = p->size[i] > mx ? p->size[i] : mx;
+    }
+    double mean = sum / 4000, sd = sqrt(sum2 / 4000 - mean * mean), esd = 0.011 / sqrt(12.0);
+    CHECK_NEAR(0.0155, mean, 4 * esd / sqrt(4000.0));
+    CHECK_REL(esd, sd, 4 / sqrt(2 * 4000.0));
+    CHECK(mn >= 0.01 && mx <= 0.021);
+    pd_scenario_destroy(s);
+    sc_particles_destroy(p);
+}
+
 TEST(random_orientations_are_uniform_unit_quaternions)
 {
     /* for uniform rotations each quaternion component has mean 0 and mean square 1/4 */
@@ -252,6 +284,7 @@ int main(void)
     RUN(generated_group_fits_without_overlaps);
     RUN(huge_regions_hold_their_groups);
     RUN(size_distributions);
+    RUN(wide_normal_is_uniform_over_its_bounds);
     RUN(random_orientations_are_uniform_unit_quaternions);
     RUN(same_seed_same_state_other_seed_other_state);
     RUN(listed_particles_mass_and_inertia);

@@ -352,6 +352,13 @@ TEST(validate_refuses_what_run_cannot_do)
                  "\"fluid\": {\"viscosity\": 1e3},"
                  "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
                  "/time/dt", "Stokes relaxation time");
+    /* a flow of 1e300 m/s carries the particles to it: the contact estimate says so */
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"fluid\": {\"viscosity\": 1e-3, \"velocity\": [1e300, 0, 0]},"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/time/dt", "stable time step estimate");
 }
 
 /* An empty object is invalid input, reported field by field, not an allocation failure. */
