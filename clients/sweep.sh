@@ -11,9 +11,14 @@
 # stderr; the rest go on. Mesh files the scenario names by path are uploaded (POST /v1/meshes)
 # and named by their id.
 #
+# Before anything is submitted: every pointer must fit the scenario, --out must be writable, and
+# some grid point must pass the daemon's dry run (POST /v1/scenarios/validate). Interrupted
+# (Ctrl-C, SIGTERM) or out of --timeout, it writes the CSV with the statuses so far and prints
+# how to cancel the jobs still queued or running; it does not cancel them itself.
+#
 # Exit status: 0 every job succeeded; 1 some job failed, was refused or did not finish in time
 # (the CSV is still written); 2 bad usage or input; 3 the server cannot be reached or answers
-# something this script does not understand.
+# something this script does not understand; 130 (143 for SIGTERM) interrupted.
 set -euo pipefail
 
 prog=sweep.sh
@@ -91,10 +96,25 @@ done
 [ -n "$scenario" ] || die 2 "no scenario file given (see --help)"
 [ -r "$scenario" ] || die 2 "cannot read scenario file '$scenario'"
 [ ${#sets[@]} -gt 0 ] || die 2 "no --set given: nothing to sweep (see --help)"
-case "$priority" in '' | *[!0-9-]* | ?*-*) die 2 "--priority '$priority': expected an integer" ;; esac
-case "$poll" in '' | *[!0-9.]* | *.*.*) die 2 "--poll '$poll': expected seconds, e.g. 1 or 0.5" ;; esac
+[[ "$priority" =~ ^-?[0-9]+$ ]] || die 2 "--priority '$priority': expected an integer"
+if ! [[ "$poll" =~ ^([0-9]+\.?[0-9]*|\.[0-9]+)$ ]] || ! awk -v p="$poll" 'BEGIN { exit !(p > 0) }'; then
+    die 2 "--poll '$poll': expected seconds > 0, e.g. 1 or 0.5"
+fi
 case "$timeout" in '' | *[!0-9]*) die 2 "--timeout '$timeout': expected whole seconds" ;; esac
 case "$server" in http://?* | https://?*) server=${server%/} ;; *) die 2 "--server '$server': expected http://HOST:PORT or https://..." ;; esac
+# The CSV is written at the end: make sure it can be before a whole sweep runs for nothing.
+if [ -n "$out" ]; then
+    out_dir=$(dirname -- "$out")
+    if [ -d "$out" ] || [ "${out%/}" != "$out" ]; then
+        die 2 "--out '$out': is a directory; give a file name"
+    elif [ ! -d "$out_dir" ]; then
+        die 2 "--out '$out': no such directory '$out_dir'"
+    elif [ -e "$out" ] && [ ! -w "$out" ]; then
+        die 2 "--out '$out': not writable"
+    elif [ ! -e "$out" ] && [ ! -w "$out_dir" ]; then
+        die 2 "--out '$out': cannot create files in '$out_dir'"
+    fi
+fi
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
@@ -138,10 +158,13 @@ jq_msg() { sed -n '1{s/^jq: error (at [^)]*): //; p}' "$tmp/err" | head -c 200; 
 
 # Parse every --set into {pointer, tokens, values} and check it applies to the scenario.
 printf '[]' >"$tmp/sets.json"
+form="expected POINTER=V1,V2,... with POINTER starting with '/', e.g. /interactions/0/friction=0.2,0.3"
 for s in "${sets[@]}"; do
     case "$s" in
     /*=?*) ;;
-    *) die 2 "--set '$s': expected POINTER=V1,V2,... with POINTER starting with '/', e.g. /interactions/0/friction=0.2,0.3" ;;
+    /*=) die 2 "--set '$s': no values after '='; $form" ;;
+    /*) die 2 "--set '$s': no '=' and values; $form" ;;
+    *) die 2 "--set '$s': $form" ;;
     esac
     ptr=${s%%=*}
     vals=${s#*=}
@@ -202,47 +225,149 @@ case "$code" in
 *) die 3 "$server does not look like polydemd: GET /healthz answered $code" ;;
 esac
 
-# Mesh files named by path (shapes and walls) go up through /v1/meshes: the daemon cannot read
-# this machine's files. The scenario then names them by the returned id.
+# Grid point I's submission in $tmp/job.json: the values put in, then the mesh files named by
+# path (shapes and walls, relative to the scenario) uploaded through /v1/meshes and named by the
+# returned id, since the daemon cannot read this machine's files. Each file goes up once; the
+# values go in first, so a mesh path can be swept.
 base_dir=$(dirname "$scenario")
-cp "$scenario" "$tmp/scenario.json"
-scenario="$tmp/scenario.json"
-jq -r '[(.shapes // {} | to_entries[] | ["shapes", .key, .value.mesh]),
-        (.walls // [] | to_entries[] | ["walls", .key, .value.mesh])]
-       | .[] | select(.[2] | type == "string" and (startswith("sha256:") | not)) | @tsv' \
-    "$scenario" >"$tmp/meshes.tsv"
-while IFS=$'\t' read -r where key file; do
-    [ -n "$where" ] || continue
-    case "$file" in /*) path=$file ;; *) path="$base_dir/$file" ;; esac
-    [ -r "$path" ] || die 2 "$where/$key: cannot read mesh file '$path'"
-    code=$(http POST /v1/meshes "$path" "Content-Type: application/octet-stream")
-    [ "$code" = 200 ] || [ "$code" = 201 ] || die 2 "$where/$key: mesh '$path' refused ($code): $(http_error)"
-    mesh_id=$(jq -r '.id' "$tmp/body")
-    jq --arg w "$where" --arg k "$key" --arg id "$mesh_id" \
-        'if $w == "shapes" then .shapes[$k].mesh = $id else .walls[$k | tonumber].mesh = $id end' \
-        "$scenario" >"$tmp/scenario2.json" && mv "$tmp/scenario2.json" "$scenario"
-    echo "$prog: uploaded $path as $mesh_id" >&2
-done <"$tmp/meshes.tsv"
-
-echo "$prog: $sweep_id: submitting $njobs jobs to $server" >&2
 base_name=$(jq -r '.name // "scenario"' "$scenario")
-ids=()
-states=()
-for ((i = 0; i < njobs; i++)); do
-    name="${base_name:0:52}-$i"
-    jq --slurpfile sets "$tmp/sets.json" --slurpfile grid "$tmp/grid.json" --arg name "$name" \
-        --argjson tags "$tags_json" --argjson prio "$priority" --argjson i "$i" "$jq_lib"'
+declare -A mesh_ids=()
+build_job() { # I
+    local where key file path
+    jq --slurpfile sets "$tmp/sets.json" --slurpfile grid "$tmp/grid.json" --arg name "${base_name:0:52}-$1" \
+        --argjson tags "$tags_json" --argjson prio "$priority" --argjson i "$1" "$jq_lib"'
         . as $sc
         | reduce range($sets[0] | length) as $k ($sc; ptr_set($sets[0][$k].tokens; $sets[0][$k].values[$grid[0][$i][$k]]))
         | .name = $name
         | {scenario: ., tags: $tags, priority: $prio}' "$scenario" >"$tmp/job.json"
+    jq -r '.scenario | [(.shapes // {} | to_entries[] | ["shapes", .key, .value.mesh?]),
+            (.walls // [] | to_entries[] | ["walls", (.key | tostring), .value.mesh?])]
+           | .[] | select(.[2] | type == "string" and (startswith("sha256:") | not)) | @tsv' \
+        "$tmp/job.json" >"$tmp/meshes.tsv"
+    while IFS=$'\t' read -r where key file; do
+        [ -n "$where" ] || continue
+        case "$file" in /*) path=$file ;; *) path="$base_dir/$file" ;; esac
+        if [ -z "${mesh_ids[$path]:-}" ]; then
+            [ -r "$path" ] || die 2 "$where/$key: cannot read mesh file '$path'"
+            code=$(http POST /v1/meshes "$path" "Content-Type: application/octet-stream")
+            case "$code" in
+            200 | 201) ;;
+            401 | 403) die 3 "the server refused the token ($code): $(http_error)" ;;
+            000) die 3 "cannot reach $server: $(head -c 300 "$tmp/curlerr")" ;;
+            *) die 2 "$where/$key: mesh '$path' refused ($code): $(http_error)" ;;
+            esac
+            mesh_ids[$path]=$(jq -r '.id' "$tmp/body")
+            echo "$prog: uploaded $path as ${mesh_ids[$path]}" >&2
+        fi
+        jq --arg w "$where" --arg k "$key" --arg id "${mesh_ids[$path]}" \
+            'if $w == "shapes" then .scenario.shapes[$k].mesh = $id else .scenario.walls[$k | tonumber].mesh = $id end' \
+            "$tmp/job.json" >"$tmp/job2.json" && mv "$tmp/job2.json" "$tmp/job.json"
+    done <"$tmp/meshes.tsv"
+}
+point_text() { # I -> "POINTER=VALUE ..." of grid point I
+    jq -r --argjson i "$1" --slurpfile g "$tmp/grid.json" \
+        '[to_entries[] | .value.pointer + "=" + .value.texts[$g[0][$i][.key]]] | join(" ")' "$tmp/sets.json"
+}
+
+# A pointer that fits but names a member the contract does not know (a misspelling of the last
+# one) would only give a grid of refusals: unless some grid point passes the daemon's dry run,
+# stop before submitting anything. Usually the first one does; a grid whose first point alone
+# has a bad value goes on, and that point is refused like any other.
+first_err=""
+valid=0
+for ((i = 0; i < njobs; i++)); do
+    build_job "$i"
+    jq .scenario "$tmp/job.json" >"$tmp/point.json"
+    code=$(http POST /v1/scenarios/validate "$tmp/point.json")
+    case "$code" in
+    200) valid=1; break ;;
+    422) [ -n "$first_err" ] || first_err="$(point_text "$i"): $(http_error)" ;;
+    401 | 403) die 3 "the server refused the token ($code): $(http_error)" ;;
+    000) die 3 "cannot reach $server: $(head -c 300 "$tmp/curlerr")" ;;
+    *) die 3 "POST /v1/scenarios/validate answered $code: $(http_error)" ;;
+    esac
+done
+[ "$valid" = 1 ] || die 2 "no grid point is a valid scenario, nothing submitted; the first, $first_err"
+
+# The CSV, the rows so far: summary numbers from /stats of every succeeded job; a grid point not
+# yet submitted when the sweep was interrupted has status "unsubmitted". Then the jobs still
+# queued or running, and how to cancel them. Ends the script: EXIT_STATUS, or 0/1 from the rows.
+ids=()
+states=()
+timed_out=0
+finish() { # [EXIT_STATUS]
+    local csv="$tmp/out.csv" i st bad=0 left=() auth=""
+    jq -r '(["job_id"] + map(.pointer) + ["status", "final_kinetic_energy_J", "peak_contacts", "peak_wall_force_N"])
+        | map(tostring | if test("[,\"\n]") then "\"" + gsub("\""; "\"\"") + "\"" else . end) | join(",")' \
+        "$tmp/sets.json" >"$csv"
+    for ((i = 0; i < njobs; i++)); do
+        st=${states[i]:-unsubmitted}
+        printf '{}' >"$tmp/summary.json"
+        if [ "$st" = succeeded ]; then
+            code=$(http GET "/v1/jobs/${ids[i]}/stats")
+            if [ "$code" = 200 ] && jq '.stats // .
+                | if type == "array" then {kinetic_energy: map(.kinetic_energy), contacts: map(.contacts),
+                      wall_force: (reduce .[] as $r ({}; reduce ($r.wall_force // {} | to_entries[]) as $w (.;
+                          .[$w.key] += [$w.value])))} else . end
+                | {ke: (.kinetic_energy // [] | last), contacts: (.contacts // [] | max),
+                   wall: ([.wall_force // {} | .[] | .[] | map(. * .) | add | sqrt] | max)}' \
+                "$tmp/body" >"$tmp/summary.json" 2>"$tmp/err"; then
+                :
+            else
+                echo "$prog: job ${ids[i]}: no usable /stats ($code): $(head -c 200 "$tmp/body")" >&2
+                printf '{}' >"$tmp/summary.json"
+            fi
+        fi
+        case "$st" in
+        succeeded) ;;
+        queued | running) left+=("${ids[i]}"); bad=1 ;;
+        *) bad=1 ;;
+        esac
+        jq -r --arg id "${ids[i]:-}" --arg st "$st" --argjson i "$i" --slurpfile grid "$tmp/grid.json" \
+            --slurpfile sets "$tmp/sets.json" '
+            [$id] + [range($sets[0] | length) as $k | $sets[0][$k].texts[$grid[0][$i][$k]]]
+            + [$st, .ke, .contacts, .wall]
+            | map(if . == null then "" else tostring end
+                  | if test("[,\"\n]") then "\"" + gsub("\""; "\"\"") + "\"" else . end) | join(",")' \
+            "$tmp/summary.json" >>"$csv"
+    done
+    if [ -n "$out" ]; then
+        cp "$csv" "$out" 2>"$tmp/err" || die 2 "--out '$out': cannot write: $(cat "$tmp/err")"
+        echo "$prog: wrote $out ($njobs rows)" >&2
+    else
+        cat "$csv"
+    fi
+    if [ ${#left[@]} -gt 0 ]; then
+        if [ -n "$token" ]; then
+            # shellcheck disable=SC2016 # printed for the user's shell
+            if [ "$token" = "${POLYDEM_TOKEN:-}" ]; then auth=' -H "Authorization: Bearer $POLYDEM_TOKEN"'
+            else auth=" -H 'Authorization: Bearer TOKEN'"; fi
+        fi
+        echo "$prog: $sweep_id: ${#left[@]} jobs still queued or running; they go on (the dashboard shows them at $server/index.html?tag=$sweep_id). To cancel them:" >&2
+        echo "  for id in ${left[*]}; do curl -sS -X POST$auth $server/v1/jobs/\$id/cancel; echo; done" >&2
+    fi
+    [ "$timed_out" -eq 0 ] || bad=1
+    exit "${1:-$bad}"
+}
+# shellcheck disable=SC2317 # called by the traps below
+on_signal() { # EXIT_STATUS
+    trap - INT TERM
+    echo "$prog: $sweep_id: interrupted; writing the CSV with the statuses so far" >&2
+    finish "$1"
+}
+trap 'on_signal 130' INT
+trap 'on_signal 143' TERM
+
+echo "$prog: $sweep_id: submitting $njobs jobs to $server" >&2
+for ((i = 0; i < njobs; i++)); do
+    build_job "$i"
     while :; do
         code=$(http POST /v1/jobs "$tmp/job.json" "Idempotency-Key: $sweep_id-$i")
         case "$code" in
         429)
             wait_s=$(grep -i '^retry-after:' "$tmp/headers" 2>/dev/null | tr -dc 0-9 || true)
             echo "$prog: job $i: the server's queue is full; retrying in ${wait_s:-5} s" >&2
-            sleep "${wait_s:-5}"
+            sleep "${wait_s:-5}" || true
             ;;
         *) break ;;
         esac
@@ -251,18 +376,15 @@ for ((i = 0; i < njobs; i++)); do
     200 | 201)
         id=$(jq -r '.id // empty' "$tmp/body" 2>/dev/null || true)
         [ -n "$id" ] || die 3 "POST /v1/jobs answered $code without a job id: $(head -c 300 "$tmp/body")"
-        ids+=("$id")
-        states+=(queued)
+        ids[i]=$id
+        states[i]=queued
         ;;
     401 | 403) die 3 "the server refused the token ($code): $(http_error)" ;;
     000) die 3 "lost contact with $server: $(head -c 300 "$tmp/curlerr")" ;;
     *)
-        msg=$(http_error)
-        echo "$prog: job $i ($(jq -r --argjson i "$i" --slurpfile g "$tmp/grid.json" \
-            '[to_entries[] | .value.pointer + "=" + .value.texts[$g[0][$i][.key]]] | join(" ")' \
-            "$tmp/sets.json")) refused ($code): $msg" >&2
-        ids+=("")
-        states+=(rejected)
+        echo "$prog: job $i ($(point_text "$i")) refused ($code): $(http_error)" >&2
+        ids[i]=""
+        states[i]=rejected
         ;;
     esac
 done
@@ -272,7 +394,6 @@ start=$(date +%s)
 last_counts=""
 last_print=0
 last_ok=$start
-timed_out=0
 while :; do
     running=0 queued=0 done_n=0 failed=0 active=""
     for ((i = 0; i < njobs; i++)); do
@@ -295,8 +416,11 @@ while :; do
             continue
         fi
         last_ok=$(date +%s)
-        IFS=$'\t' read -r st frac eta err < <(jq -r '[.status, (.progress.fraction // 0),
-            (.progress.eta_seconds // ""), (.error // "" | tostring)] | @tsv' "$tmp/body")
+        # fields joined by US (0x1f), not tabs: read collapses runs of whitespace separators, so
+        # an empty ETA would shift the error text out of its place
+        IFS=$'\x1f' read -r st frac eta err < <(jq -r '[.status, (.progress.fraction // 0),
+            (.progress.eta_seconds // ""), (.error // "" | tostring | gsub("[\n\u001f]"; " "))]
+            | map(tostring) | join("\u001f")' "$tmp/body")
         states[i]=$st
         case "$st" in
         succeeded) done_n=$((done_n + 1)) ;;
@@ -325,47 +449,6 @@ while :; do
         timed_out=1
         break
     fi
-    sleep "$poll"
+    sleep "$poll" || true
 done
-
-# The CSV: summary numbers from /stats of every succeeded job.
-csv="$tmp/out.csv"
-jq -r '(["job_id"] + map(.pointer) + ["status", "final_kinetic_energy_J", "peak_contacts", "peak_wall_force_N"])
-    | map(tostring | if test("[,\"\n]") then "\"" + gsub("\""; "\"\"") + "\"" else . end) | join(",")' \
-    "$tmp/sets.json" >"$csv"
-for ((i = 0; i < njobs; i++)); do
-    printf '{}' >"$tmp/summary.json"
-    if [ "${states[i]}" = succeeded ]; then
-        code=$(http GET "/v1/jobs/${ids[i]}/stats")
-        if [ "$code" = 200 ] && jq '.stats // .
-            | if type == "array" then {kinetic_energy: map(.kinetic_energy), contacts: map(.contacts),
-                  wall_force: (reduce .[] as $r ({}; reduce ($r.wall_force // {} | to_entries[]) as $w (.;
-                      .[$w.key] += [$w.value])))} else . end
-            | {ke: (.kinetic_energy // [] | last), contacts: (.contacts // [] | max),
-               wall: ([.wall_force // {} | .[] | .[] | map(. * .) | add | sqrt] | max)}' \
-            "$tmp/body" >"$tmp/summary.json" 2>"$tmp/err"; then
-            :
-        else
-            echo "$prog: job ${ids[i]}: no usable /stats ($code): $(head -c 200 "$tmp/body")" >&2
-            printf '{}' >"$tmp/summary.json"
-        fi
-    fi
-    jq -r --arg id "${ids[i]}" --arg st "${states[i]}" --argjson i "$i" --slurpfile grid "$tmp/grid.json" \
-        --slurpfile sets "$tmp/sets.json" '
-        [$id] + [range($sets[0] | length) as $k | $sets[0][$k].texts[$grid[0][$i][$k]]]
-        + [$st, .ke, .contacts, .wall]
-        | map(if . == null then "" else tostring end
-              | if test("[,\"\n]") then "\"" + gsub("\""; "\"\"") + "\"" else . end) | join(",")' \
-        "$tmp/summary.json" >>"$csv"
-done
-if [ -n "$out" ]; then
-    cp "$csv" "$out" 2>"$tmp/err" || die 2 "--out '$out': cannot write: $(cat "$tmp/err")"
-    echo "$prog: wrote $out ($njobs rows)" >&2
-else
-    cat "$csv"
-fi
-
-bad=0
-for st in "${states[@]}"; do [ "$st" = succeeded ] || bad=1; done
-[ "$timed_out" -eq 0 ] || bad=1
-exit "$bad"
+finish

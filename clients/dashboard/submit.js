@@ -143,7 +143,7 @@ async function submit() {
     location.href = `index.html?highlight=${encodeURIComponent(job.id)}`;
   } catch (e) {
     if (e.details && e.details.length) {
-      showErrors(text, locate(text).spans, e.details);
+      showErrors(text, locate(text).spans, e.details.map((d) => ({ ...d, path: editorPath(d.path, scenario) })));
       showMessage(`not submitted: ${e.message}`);
     } else {
       showMessage(`not submitted: ${e.message}`);
@@ -151,6 +151,15 @@ async function submit() {
   } finally {
     submitBtn.disabled = false;
   }
+}
+
+// POST /v1/jobs gets the editor's scenario wrapped as {scenario, tags, priority}, so its error
+// paths point into the wrapper (/scenario/time/dt); the editor holds the bare scenario
+// (/time/dt) unless it has a "scenario" member of its own.
+function editorPath(path, scenario) {
+  if (!path || (scenario && typeof scenario === 'object' && 'scenario' in scenario)) return path;
+  if (path === '/scenario') return '';
+  return path.startsWith('/scenario/') ? path.slice('/scenario'.length) : path;
 }
 
 async function loadExample(name) {

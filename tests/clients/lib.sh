@@ -101,6 +101,45 @@ f 4 5 8
 OBJ
 }
 
+api() { # PATH [CURL_ARGS...]: curl $URL$PATH, with $POLYDEM_TOKEN when it is set
+    api_path=$1
+    shift
+    if [ -n "${POLYDEM_TOKEN:-}" ]; then
+        curl -s --max-time 10 -H "Authorization: Bearer $POLYDEM_TOKEN" "$@" "$URL$api_path"
+    else
+        curl -s --max-time 10 "$@" "$URL$api_path"
+    fi
+}
+
+# tests/server/long_job.json submitted and running (so that jobs after it wait in the queue);
+# prints its id. Cancel it when done.
+long_job_running() {
+    jq '{scenario: ., tags: ["blocker"]}' tests/server/long_job.json >"$tmp/long_job_body.json"
+    lj=$(api /v1/jobs --data-binary @"$tmp/long_job_body.json" | jq -r .id)
+    i=0
+    while [ "$(api "/v1/jobs/$lj" | jq -r .status)" != running ] && [ $i -lt 300 ]; do
+        sleep 0.1
+        i=$((i + 1))
+    done
+    echo "$lj"
+}
+
+# Waits up to 30 s for a sweep's id on its stderr (either client's "ID: submitting" line) and
+# N jobs carrying it as a tag; prints the id.
+sweep_started() { # STDERR_FILE N
+    i=0
+    while [ $i -lt 300 ]; do
+        sid=$(sed -n 's/^[a-z_.]*: \(sweep-[0-9]*-[0-9]*-[0-9a-f]*\): submitting.*/\1/p' "$1" | head -n 1)
+        if [ -n "$sid" ] && [ "$(api "/v1/jobs?tag=$sid" | jq '.jobs | length')" = "$2" ]; then
+            echo "$sid"
+            return 0
+        fi
+        sleep 0.1
+        i=$((i + 1))
+    done
+    return 1
+}
+
 summary() {
     if [ "$failed" -ne 0 ] && [ -s "$tmp/polydemd.log" ]; then
         echo "-- polydemd log (last 15 lines):"

@@ -101,6 +101,20 @@ def main():
             assert '"friction"' in sel, "clicking the path selects %r" % sel
         step("invalid_scenario_shows_field_error", field_error)
 
+        # Submit anyway: POST /v1/jobs names the field in the wrapped body (/scenario/...), shown
+        # at the editor's path and line, not at line 1
+        def submit_error():
+            page.eval("document.getElementById('submit').click()")
+            page.wait_for("(document.getElementById('message') || {}).textContent"
+                          " && document.getElementById('message').textContent.includes('not submitted')", 15)
+            paths = page.eval("[...document.querySelectorAll('.field-error')].map(e => e.dataset.path).join(' ')")
+            assert paths == "/interactions/0/friction", "error paths %r" % paths
+            where = page.eval("document.querySelector('.field-error .where').textContent")
+            lines = json.dumps(invalid, indent=2).split("\n")
+            line = next(n for n, text in enumerate(lines, 1) if '"friction"' in text)
+            assert where == "line %d" % line, "shown at %r, the field is on line %d" % (where, line)
+        step("submit_error_at_field_line", submit_error)
+
         def syntax_error():
             set_editor(page, '{"time": {"dt": 1e-6,,}}')
             page.wait_for("(document.querySelector('.field-error') || {}).innerText"

@@ -80,13 +80,56 @@ if start_daemon; then
             ok download_opens_with_h5dump; else bad download_opens_with_h5dump "no /stats/kinetic_energy"; fi
     fi
     timeout 60 python3 -B "$CLIENT" --server "$URL" --timeout 120 download "$id" --xmf -o "$tmp/r.xmf" 2>"$tmp/err"
-    if grep -q "<Xdmf" "$tmp/r.xmf" 2>/dev/null; then ok download_xmf; else
+    if grep -q "<Xdmf" "$tmp/r.xmf" 2>/dev/null && grep -q ">$id.h5:/" "$tmp/r.xmf"; then ok download_xmf; else
         bad download_xmf "$(head -c 200 "$tmp/r.xmf" 2>/dev/null) $(cat "$tmp/err")"; fi
-    # a partial file left by an interrupted download is completed with a Range request
+    # saved as NAME.h5.xmf, the XDMF refers to NAME.h5 (the README's pair of -o names)
+    timeout 60 python3 -B "$CLIENT" --server "$URL" download "$id" --xmf -o "$tmp/r.h5.xmf" 2>"$tmp/err"
+    refs=$(grep -o 'Format="HDF">[^:<]*:' "$tmp/r.h5.xmf" 2>/dev/null | sort -u | tr '\n' ' ')
+    check xmf_refers_to_local_h5 'Format="HDF">r.h5: ' "$refs"
+    # a partial file left by an interrupted download is completed with a Range request, If-Range
+    # the ETag it started with
     head -c 1000 "$tmp/r.h5" >"$tmp/again.h5.part"
+    curl -sI "$URL/v1/jobs/$id/result" | sed -n 's/^[Ee][Tt][Aa][Gg]: *//p' | tr -d '\r' >"$tmp/again.h5.part.etag"
     timeout 60 python3 -B "$CLIENT" --server "$URL" --timeout 120 download "$id" -o "$tmp/again.h5" 2>"$tmp/err"
-    if cmp -s "$tmp/r.h5" "$tmp/again.h5"; then ok download_resumes; else
-        bad download_resumes "the resumed file differs: $(cat "$tmp/err")"; fi
+    if cmp -s "$tmp/r.h5" "$tmp/again.h5" && [ ! -e "$tmp/again.h5.part.etag" ]; then ok download_resumes; else
+        bad download_resumes "the resumed file differs or its .etag stayed: $(cat "$tmp/err")"; fi
+    # a .part of another file (its ETag differs, or none was kept) is not glued to this one
+    head -c 1000 /dev/zero >"$tmp/other.h5.part"
+    echo '"some-other-file"' >"$tmp/other.h5.part.etag"
+    timeout 60 python3 -B "$CLIENT" --server "$URL" download "$id" -o "$tmp/other.h5" 2>"$tmp/err"
+    if cmp -s "$tmp/r.h5" "$tmp/other.h5"; then ok download_changed_file_starts_over; else
+        bad download_changed_file_starts_over "the file differs: $(cat "$tmp/err")"; fi
+    head -c 1000 /dev/zero >"$tmp/noetag.h5.part"
+    timeout 60 python3 -B "$CLIENT" --server "$URL" download "$id" -o "$tmp/noetag.h5" 2>"$tmp/err"
+    if cmp -s "$tmp/r.h5" "$tmp/noetag.h5"; then ok download_unknown_part_starts_over; else
+        bad download_unknown_part_starts_over "the file differs: $(cat "$tmp/err")"; fi
+    # a connection cut mid-transfer: exit 3, the .part kept (not renamed as if complete), and
+    # the next download completes it
+    python3 -B tests/clients/cutproxy.py "$port" 30000 >"$tmp/proxy.port" 2>/dev/null &
+    proxy_pid=$!
+    i=0
+    while [ ! -s "$tmp/proxy.port" ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+    timeout 60 python3 -B "$CLIENT" --server "http://127.0.0.1:$(cat "$tmp/proxy.port")" download "$id" \
+        -o "$tmp/cut.h5" 2>"$tmp/err"
+    rc=$?
+    kill "$proxy_pid" 2>/dev/null
+    if [ "$rc" = 3 ] && [ ! -e "$tmp/cut.h5" ] && [ -s "$tmp/cut.h5.part" ] && grep -q "is kept" "$tmp/err"; then
+        ok download_cut_keeps_part; else
+        bad download_cut_keeps_part "expected exit 3, no cut.h5 and a .part, got $rc: $(cat "$tmp/err")"; fi
+    timeout 60 python3 -B "$CLIENT" --server "$URL" download "$id" -o "$tmp/cut.h5" 2>"$tmp/err"
+    if cmp -s "$tmp/r.h5" "$tmp/cut.h5"; then ok download_cut_then_resumed; else
+        bad download_cut_then_resumed "the file differs: $(cat "$tmp/err")"; fi
+    # -o must name a file in an existing directory: a message and exit 2, no traceback, no .part
+    mkdir -p "$tmp/dir"
+    timeout 20 python3 -B "$CLIENT" --server "$URL" download "$id" -o "$tmp/dir/" 2>"$tmp/err"
+    rc=$?
+    if [ "$rc" = 2 ] && grep -q "is a directory" "$tmp/err" && [ -z "$(ls -A "$tmp/dir")" ]; then ok download_to_directory; else
+        bad download_to_directory "expected exit 2 and an empty directory, got $rc: $(cat "$tmp/err")"; fi
+    timeout 20 python3 -B "$CLIENT" --server "$URL" download "$id" -o /nonexistent/dir/x.h5 2>"$tmp/err"
+    rc=$?
+    if [ "$rc" = 2 ] && grep -q "no such directory" "$tmp/err" && ! grep -q Traceback "$tmp/err"; then
+        ok download_missing_directory; else
+        bad download_missing_directory "expected exit 2 naming the directory, got $rc: $(cat "$tmp/err")"; fi
     timeout 150 python3 -B "$CLIENT" --server "$URL" --timeout 120 sweep "$tmp/quick.json" --set '/interactions/0/damping=0,0.2' --poll 0.3 \
         >"$tmp/sweep.csv" 2>"$tmp/sweep.err"
     check sweep_exit_status 0 "$?"
@@ -96,6 +139,54 @@ if start_daemon; then
         "$(tail -n +2 "$tmp/sweep.csv" | cut -d, -f2,3 | tr '\n' ' ' | sed 's/ $//')"
     timeout 30 python3 -B "$CLIENT" --server "$URL" --timeout 120 submit "$tmp/nothere.json" >/dev/null 2>&1
     check missing_file_with_daemon 2 "$?"
+    # refused before anything is submitted: an --out that cannot be written, a member the
+    # scenario contract does not know (the pointer fits: its last member may be new)
+    before=$(api "/v1/jobs?limit=1000" | jq '.jobs | length')
+    timeout 30 python3 -B "$CLIENT" --server "$URL" sweep "$tmp/quick.json" --set '/interactions/0/damping=0,0.2' \
+        --out /nonexistent/x.csv >/dev/null 2>"$tmp/err"
+    rc=$?
+    if [ "$rc" = 2 ] && grep -q "/nonexistent/x.csv" "$tmp/err"; then ok sweep_out_unwritable; else
+        bad sweep_out_unwritable "expected exit 2 naming the file, got $rc: $(cat "$tmp/err")"; fi
+    timeout 30 python3 -B "$CLIENT" --server "$URL" sweep "$tmp/quick.json" --set '/interactions/0/frictoin=0.2,0.3' \
+        >/dev/null 2>"$tmp/err"
+    rc=$?
+    if [ "$rc" = 2 ] && grep -q "frictoin: unknown field" "$tmp/err"; then ok sweep_misspelled_member; else
+        bad sweep_misspelled_member "expected exit 2 with the daemon's message, got $rc: $(cat "$tmp/err")"; fi
+    check sweep_refusals_submit_nothing "$before" "$(api "/v1/jobs?limit=1000" | jq '.jobs | length')"
+    # behind a running job: a sweep job deleted while it waits gets its row (status deleted)
+    # and the sweep goes on; a sweep stopped by SIGTERM writes its CSV and says how to cancel.
+    # (A queued job is cancelled, then deleted: the long --poll keeps the sweep from seeing it
+    # cancelled in between.)
+    long=$(long_job_running)
+    timeout 150 python3 -B "$CLIENT" --server "$URL" sweep "$tmp/quick.json" --set '/interactions/0/damping=0,0.2' \
+        --poll 3 >"$tmp/del.csv" 2>"$tmp/del.err" &
+    del_pid=$!
+    sid=$(sweep_started "$tmp/del.err" 2)
+    first=$(api "/v1/jobs?tag=$sid" | jq -r '.jobs | sort_by(.name) | .[0].id')
+    api "/v1/jobs/$first/cancel" -o /dev/null -X POST
+    api "/v1/jobs/$first" -o /dev/null -X DELETE
+    # (--foreground: a plain timeout passes the signal on to its whole process group as well,
+    # and a second signal ends a sweep at once, without its CSV)
+    timeout --foreground 60 python3 -B "$CLIENT" --server "$URL" sweep "$tmp/quick.json" --set '/seed=1,2' --poll 0.3 \
+        --out "$tmp/int.csv" 2>"$tmp/int.err" &
+    int_pid=$!
+    sid=$(sweep_started "$tmp/int.err" 2)
+    kill -TERM "$int_pid"
+    wait "$int_pid"
+    check sweep_interrupted_exit_status 143 "$?"
+    check sweep_interrupted_rows "queued queued" \
+        "$(tail -n +2 "$tmp/int.csv" 2>/dev/null | cut -d, -f3 | tr '\n' ' ' | sed 's/ $//')"
+    hint=$(sed -n 's/^polydem_client: to cancel them: //p' "$tmp/int.err")
+    if [ -n "$sid" ] && [ "${hint%" cancel --tag $sid"}" != "$hint" ] && sh -c "$hint" 2>"$tmp/err"; then
+        ok sweep_interrupted_says_how_to_cancel; else
+        bad sweep_interrupted_says_how_to_cancel "no working cancel command: $(tail -n 3 "$tmp/int.err") $(cat "$tmp/err")"; fi
+    check sweep_interrupted_jobs_cancelled "cancelled cancelled" \
+        "$(api "/v1/jobs?tag=$sid" | jq -r '[.jobs[].status] | join(" ")')"
+    api "/v1/jobs/$long/cancel" -o /dev/null -X POST
+    wait "$del_pid"
+    check sweep_deleted_exit_status 1 "$?"
+    check sweep_deleted_rows "deleted succeeded" \
+        "$(tail -n +2 "$tmp/del.csv" 2>/dev/null | cut -d, -f3 | tr '\n' ' ' | sed 's/ $//')"
     # a shape given as a mesh file beside the scenario is uploaded and the job runs
     mkdir -p "$tmp/withmesh"
     cube_obj "$tmp/withmesh/cube.obj"

@@ -24,7 +24,7 @@ quick_scenario "$tmp/quick.json"
 dead="http://127.0.0.1:$(free_port)"
 expect_refusal unknown_option 2 "unknown option '--frobnicate'" --frobnicate "$tmp/quick.json"
 expect_refusal set_without_pointer 2 "expected POINTER=V1,V2" "$tmp/quick.json" --set 'friction=0.2'
-expect_refusal set_without_values 2 "expected POINTER=V1,V2" "$tmp/quick.json" --set '/interactions/0/friction='
+expect_refusal set_without_values 2 "no values after '='" "$tmp/quick.json" --set '/interactions/0/friction='
 expect_refusal set_empty_value 2 "empty value" "$tmp/quick.json" --set '/interactions/0/friction=0.1,,0.2'
 expect_refusal set_missing_path 2 "no member \"nope\"" "$tmp/quick.json" --set '/nope/x=1'
 expect_refusal set_bad_index 2 "index 7 is outside" "$tmp/quick.json" --set '/interactions/7/friction=1'
@@ -32,6 +32,10 @@ expect_refusal no_set 2 "no --set given" "$tmp/quick.json"
 expect_refusal missing_file 2 "cannot read scenario file" "$tmp/nothere.json" --set '/seed=1'
 expect_refusal bad_server_url 2 "--server 'localhost:1'" --server localhost:1 "$tmp/quick.json" --set '/seed=1'
 expect_refusal unreachable_server 3 "cannot reach $dead" --server "$dead" "$tmp/quick.json" --set '/seed=1,2'
+expect_refusal bad_poll 2 "--poll '.'" --poll . "$tmp/quick.json" --set '/seed=1'
+expect_refusal bad_priority 2 "--priority '-': expected an integer" --priority - "$tmp/quick.json" --set '/seed=1'
+expect_refusal out_unwritable 2 "--out '/nonexistent/x.csv'" --server "$dead" --out /nonexistent/x.csv \
+    "$tmp/quick.json" --set '/seed=1'
 
 TOKEN="sweep-test-token-0123456789"
 echo "$TOKEN tester" >"$tmp/tokens"
@@ -87,5 +91,49 @@ if start_daemon; then
         "$(tail -n +2 "$tmp/mixed.csv" 2>/dev/null | cut -d, -f3 | tr '\n' ' ' | sed 's/ $//')"
     if grep -q '/interactions/0/friction' "$tmp/mixed.err"; then ok refused_point_message; else
         bad refused_point_message "stderr does not name the field: $(head -c 300 "$tmp/mixed.err")"; fi
+    # a misspelled member fits the scenario (a pointer's last member may be new) but no grid
+    # point passes the daemon's dry run: exit 2 with its message, nothing submitted
+    before=$(api "/v1/jobs?limit=1000" | jq '.jobs | length')
+    expect_refusal misspelled_member 2 "frictoin: unknown field" --server "$URL" "$tmp/quick.json" \
+        --set '/interactions/0/frictoin=0.2,0.3'
+    check misspelled_member_submits_nothing "$before" "$(api "/v1/jobs?limit=1000" | jq '.jobs | length')"
+    # a swept mesh path is uploaded after the value is put in
+    mkdir -p "$tmp/withmesh/sub"
+    cube_obj "$tmp/withmesh/sub/cube.obj"
+    timeout 100 bash "$SWEEP" --server "$URL" "$tmp/withmesh/scenario.json" --set '/shapes/r/mesh=sub/cube.obj' \
+        --out "$tmp/mesh2.csv" --poll 0.3 2>"$tmp/mesh2.err"
+    rc=$?
+    if [ "$rc" = 0 ] && grep -q "uploaded .*sub/cube.obj as sha256:" "$tmp/mesh2.err"; then ok mesh_path_swept; else
+        bad mesh_path_swept "exit $rc: $(tail -n 3 "$tmp/mesh2.err")"; fi
+    # a job that fails: its row says failed and stderr gives the job's error (a diverging run)
+    jq '.allow_unstable_dt = true | .materials.rock.youngs_modulus = 1e11 | .time.dt = 2e-4
+        | .time.duration = 0.2 | .time.output_interval = 0.002 | .particles[0].list[0].velocity = [3, 0, 0]' \
+        "$tmp/quick.json" >"$tmp/diverge.json"
+    timeout 100 bash "$SWEEP" --server "$URL" "$tmp/diverge.json" --set '/seed=1' --out "$tmp/div.csv" \
+        --poll 0.3 2>"$tmp/div.err"
+    rc=$?
+    if [ "$rc" = 1 ] && grep -q "failed: run diverged" "$tmp/div.err"; then ok failed_job_error_shown; else
+        bad failed_job_error_shown "expected exit 1 and the job's error, got $rc: $(tail -n 3 "$tmp/div.err")"; fi
+    # interrupted (SIGTERM; a background job here ignores SIGINT) behind a running job: the CSV
+    # with the statuses so far, exit 143, and a command that cancels the jobs left
+    long=$(long_job_running)
+    # (--foreground: a plain timeout passes the signal on to its whole process group as well,
+    # and a second signal ends a sweep at once, without its CSV)
+    timeout --foreground 60 bash "$SWEEP" --server "$URL" "$tmp/quick.json" --set '/seed=1,2' --poll 0.3 \
+        --out "$tmp/int.csv" 2>"$tmp/int.err" &
+    int_pid=$!
+    sid=$(sweep_started "$tmp/int.err" 2)
+    kill -TERM "$int_pid"
+    wait "$int_pid"
+    check interrupted_exit_status 143 "$?"
+    check interrupted_rows "queued queued" \
+        "$(tail -n +2 "$tmp/int.csv" 2>/dev/null | cut -d, -f3 | tr '\n' ' ' | sed 's/ $//')"
+    hint=$(grep '^  for id in ' "$tmp/int.err")
+    if [ -n "$hint" ] && bash -c "$hint" >"$tmp/cancel.out" 2>&1 && [ "$(grep -c '"status"' "$tmp/cancel.out")" = 2 ]; then
+        ok interrupted_says_how_to_cancel; else
+        bad interrupted_says_how_to_cancel "no working cancel command: $(tail -n 3 "$tmp/int.err") -> $(cat "$tmp/cancel.out")"; fi
+    check interrupted_jobs_cancelled "cancelled cancelled" \
+        "$(api "/v1/jobs?tag=$sid" | jq -r '[.jobs[].status] | join(" ")')"
+    api "/v1/jobs/$long/cancel" -o /dev/null -X POST
 fi
 summary
