@@ -15,7 +15,9 @@
 #include <string.h>
 #include <sys/stat.h>
 
+#include "particles.h"
 #include "scenario.h"
+#include "wall_tree.h"
 
 static const double PI = 3.14159265358979323846;
 
@@ -1039,6 +1041,53 @@ static void check_extremes(sc_parse *p)
     }
 }
 
+/*
+ * A particle whose centre starts inside a wall would never be pushed out along a sensible normal,
+ * and a run refuses it (sim_state.c); validation says so first, naming the particle. The places
+ * are drawn as a run draws them, for scenarios of up to SC_CHECK_PLACES particles (beyond that
+ * only a run checks, so that validating a huge scenario stays cheap).
+ */
+#define SC_CHECK_PLACES 200000
+static void check_walls_clear(sc_parse *p)
+{
+    pd_scenario *s = p->s;
+    long total = 0;
+    for (int i = 0; i < s->ngroup; i++)
+        total += s->group[i].count;
+    if (!s->nwall || total > SC_CHECK_PLACES) return;
+    sc_particles *pa = NULL;
+    pd_error err = {0};
+    if (sc_particles_create(s, &pa, &err) != PD_OK) {
+        diag(p, "/particles", "%s", err.msg);
+        return;
+    }
+    for (int w = 0; w < s->nwall; w++) {
+        const pd_mesh *me = s->wall[w].mesh;
+        wall_tree t;
+        if (!me ||
+            wall_tree_build(me->verts, me->tris, me->ntris, &t, s->wall[w].name, &err) != PD_OK)
+            continue; /* out of memory: the run will say so */
+        long i = wall_tree_first_inside(&t, me->verts, me->tris, pa->x, pa->n);
+        wall_tree_free(&t);
+        if (i < 0) continue;
+        long first = 0;
+        int g = 0;
+        while (g + 1 < s->ngroup && i >= first + s->group[g].count)
+            first += s->group[g++].count;
+        char c[SC_PATH_MAX];
+        if (s->group[g].list)
+            put(c, sizeof c, "/particles/%d/list/%ld/position", g, i - first);
+        else
+            put(c, sizeof c, "/particles/%d", g);
+        const double *x = pa->x + 3 * i;
+        diag(p, c,
+             "particle %ld of the group starts with its centre (%g, %g, %g) m inside wall '%s': "
+             "move the particles or the wall",
+             i - first, x[0], x[1], x[2], s->wall[w].name);
+    }
+    sc_particles_destroy(pa);
+}
+
 /* A generated group must fit its region on a lattice of circumscribed spheres of the largest. */
 static void check_fit(sc_parse *p)
 {
@@ -1129,6 +1178,9 @@ int pd_scenario_parse(const char *json_text, const char *base_dir, pd_scenario *
         check_pairs(&p);
         check_fit(&p);
         check_extremes(&p);
+    }
+    if (!p.failed) {
+        check_walls_clear(&p);
     }
     if (!p.failed) {
         double rayleigh, hertz, stable;

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #define PD_DOUBLE 1
+#include "contact_pair.h" /* cp_inside_tree: the kernels' own inside test */
 #include "wall_bvh.h"
 #include "wall_tree.h"
 
@@ -213,4 +214,18 @@ int wall_tree_max_near(const wall_tree *t, const double *vert, const int *tri, i
     free(key);
     free(cnt);
     return best < nt ? (int)best : nt;
+}
+
+long wall_tree_first_inside(const wall_tree *t, const double *vert, const int *tri,
+                            const double *pts, long n)
+{
+    wb_tree wt = {t->box, t->kid, t->order, vert, tri};
+    const double *b = t->box;
+    for (long i = 0; i < n; i++) {
+        const double *x = pts + 3 * i;
+        if (x[0] < b[0] || x[0] > b[3] || x[1] < b[1] || x[1] > b[4] || x[2] < b[2] || x[2] > b[5])
+            continue;
+        if (cp_inside_tree(&wt, v3(x[0], x[1], x[2]))) return i;
+    }
+    return -1;
 }

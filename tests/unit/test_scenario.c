@@ -53,6 +53,9 @@ TEST(issue_example_parses_with_defaults)
     pd_mesh_builtin("cube", 0, 0, &cube, &err);
     snprintf(stl, sizeof stl, "%s/rock.stl", dir);
     CHECK(pd_mesh_write_stl(cube, stl, &err) == PD_OK);
+    /* the bin beside the particles' region: a wall around their centres is refused */
+    for (int i = 0; i < cube->nverts; i++)
+        cube->verts[3 * i] += 5;
     snprintf(stl, sizeof stl, "%s/bin.stl", dir);
     CHECK(pd_mesh_write_stl(cube, stl, &err) == PD_OK);
     pd_mesh_destroy(cube);
@@ -352,6 +355,17 @@ TEST(validate_refuses_what_run_cannot_do)
                  "\"fluid\": {\"viscosity\": 1e3},"
                  "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
                  "/time/dt", "Stokes relaxation time");
+    /* a particle starting with its centre inside a wall: run refuses it, so validate does */
+    expect_error(BASE_HEAD
+                 "\"walls\": [{\"name\": \"floor\", \"material\": \"rock\", \"box\": "
+                 "{\"min\": [-1,-1,-1], \"max\": [1,1,0]}}],"
+                 "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", \"list\": "
+                 "[{\"position\": [0,0,0.5], \"size\": 0.01}, {\"position\": [0.2,0,-0.3], "
+                 "\"size\": 0.01}]}]}",
+                 "/particles/0/list/1/position", "inside wall 'floor'");
+    expect_error(BASE_HEAD "\"walls\": [{\"name\": \"floor\", \"material\": \"rock\", \"box\": "
+                           "{\"min\": [-1,-1,-1], \"max\": [1,1,0.05]}}]," BASE_GROUP,
+                 "/particles/0", "inside wall 'floor'");
     /* a flow of 1e300 m/s carries the particles to it: the contact estimate says so */
     expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
                  "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
