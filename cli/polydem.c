@@ -451,9 +451,10 @@ static int cmd_run(int argc, char **argv)
         fprintf(stderr, "polydem: %s: %s\n", file, err.msg);
         if (fin.result_kept)
             fprintf(stderr,
-                    "polydem: %s: kept the %lld frames written before the stop (the run reached "
+                    "polydem: %s: kept the %lld frame%s written before the stop (the run reached "
                     "t = %.6g s of %.6g s); its root attribute status says \"%s\"\n",
-                    out, fin.frames, fin.sim_time, fin.sim_duration, pd_run_status(rc));
+                    out, fin.frames, fin.frames == 1 ? "" : "s", fin.sim_time, fin.sim_duration,
+                    pd_run_status(rc));
     }
     pd_device_close(dev);
     pd_scenario_destroy(sc);

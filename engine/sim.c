@@ -118,26 +118,78 @@ static int open_result(sim *m, const pd_run_options *opt, rh5_writer **out, pd_e
     return PD_OK;
 }
 
-/* Energy a run may reach without something being wrong: 10x the initial kinetic energy plus
- * what gravity can release across the scene plus what moving walls can impart. */
-static double energy_bound(const sim *m, double ke0)
+/*
+ * What a run can supply, for the runaway check (a kinetic energy 10x beyond it stops the run):
+ * fixed at the start, plus gravity's work, which grows with the time fallen.
+ */
+typedef struct energy_budget {
+    double fixed;    /* J */
+    double mg;       /* total weight, N */
+    double h, v0, g; /* the scene's extent (m), fastest start (m/s), |g| (m/s^2) */
+} energy_budget;
+
+/*
+ * The energy a scenario can supply: the initial kinetic energy; what moving walls and a flow can
+ * give (every particle at twice their speed); what initial overlaps and cohesion store (bounded
+ * by 1/2 M c^2, c = sqrt(E / rho) the slowest material's wave speed: an overlap of a particle's
+ * size stores about E V, and DEM particles never outrun their wave speed, where a runaway soon
+ * does); and gravity's work over the scene's height (particles, their sizes and the walls) or
+ * over the fall since the start, whichever is larger (particles need not land).
+ */
+static energy_budget energy_of(const sim *m, double ke0)
 {
     const pd_scenario *s = m->s;
-    double g = sqrt(s->gravity[0] * s->gravity[0] + s->gravity[1] * s->gravity[1] +
-                    s->gravity[2] * s->gravity[2]);
-    double ext = 0, mass = 0, vw = 0;
-    for (int k = 0; k < 3; k++)
-        ext += 1 / (m->inv_ext[k] * m->inv_ext[k]);
-    ext = sqrt(ext);
-    for (int i = 0; i < m->n; i++)
+    energy_budget b = {0, 0, 0, 0, 0};
+    b.g = sqrt(s->gravity[0] * s->gravity[0] + s->gravity[1] * s->gravity[1] +
+               s->gravity[2] * s->gravity[2]);
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double mass = 0, c2 = INFINITY, vw = 0;
+    for (long i = 0; i < m->n; i++) {
+        const double *x = m->p->x + 3 * i, *v = m->p->v + 3 * i;
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], x[k] - m->p->size[i]);
+            hi[k] = fmax(hi[k], x[k] + m->p->size[i]);
+        }
+        b.v0 = fmax(b.v0, sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]));
         mass += m->p->mass[i];
-    for (int i = 0; i < s->nwall; i++) {
-        const double *v = s->wall[i].velocity, *w = s->wall[i].angular_velocity;
-        double sp = sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) +
-                    sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]) * ext;
-        vw = sp > vw ? sp : vw;
+        const sc_material *mt = &s->mat[m->p->material[i]];
+        c2 = fmin(c2, mt->youngs_modulus / mt->density);
     }
-    return 10 * (ke0 + mass * g * ext + 0.5 * mass * 4 * vw * vw) + 1e-300;
+    for (int w = 0; w < s->nwall; w++) {
+        const pd_mesh *me = s->wall[w].mesh;
+        const double *v = s->wall[w].velocity, *om = s->wall[w].angular_velocity,
+                     *c = s->wall[w].center;
+        double r = 0;
+        for (int j = 0; me && j < me->nverts; j++) {
+            const double *p = me->verts + 3 * j;
+            double d2 = 0;
+            for (int k = 0; k < 3; k++) {
+                lo[k] = fmin(lo[k], p[k]);
+                hi[k] = fmax(hi[k], p[k]);
+                d2 += (p[k] - c[k]) * (p[k] - c[k]);
+            }
+            r = fmax(r, sqrt(d2));
+        }
+        vw = fmax(vw, sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) +
+                          sqrt(om[0] * om[0] + om[1] * om[1] + om[2] * om[2]) * r);
+    }
+    if (s->has_fluid && s->fluid_viscosity > 0) {
+        const double *u = s->fluid_velocity;
+        vw = fmax(vw, sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]));
+    }
+    for (int k = 0; k < 3 && isfinite(lo[k]); k++)
+        b.h += (hi[k] - lo[k]) * (hi[k] - lo[k]);
+    b.h = sqrt(b.h);
+    b.mg = mass * b.g;
+    b.fixed = ke0 + 2 * mass * vw * vw + (isfinite(c2) ? 0.5 * mass * c2 : 0);
+    return b;
+}
+
+/* Energy a run may reach at time t without something being wrong: 10x what it can supply. */
+static double energy_bound(const energy_budget *b, double t)
+{
+    double fall = b->v0 * t + 0.5 * b->g * t * t;
+    return 10 * (b->fixed + b->mg * fmax(b->h, fall)) + 1e-300;
 }
 
 const char *pd_run_status(int rc)
@@ -216,15 +268,18 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
     if ((rc = open_result(m, opt, &w, err)) != PD_OK) goto done;
 
     long long steps = sc_steps(s->duration, s->dt);
-    long long stats_every = llround(s->stats_interval / s->dt);
-    long long frame_every = llround(s->output_interval / s->dt);
+    /* intervals to the nearest whole step, halves up even where the quotient rounds below them
+     * (0.00015 / 1e-4 = 1.4999999999999998: every 2 steps, not every step) */
+    long long stats_every = (long long)floor(s->stats_interval / s->dt * (1 + 1e-12) + 0.5);
+    long long frame_every = (long long)floor(s->output_interval / s->dt * (1 + 1e-12) + 0.5);
     if (stats_every < 1) stats_every = 1;
     if (frame_every < 1) frame_every = 1;
     pr.steps_total = steps;
     pr.sim_duration = (double)steps * s->dt;
     pr.particles = m->n;
     double interval = opt->progress_interval > 0 ? opt->progress_interval : 0.5;
-    double last_report = now_seconds(), rate_t0 = last_report, ebound = 0;
+    double last_report = now_seconds(), rate_t0 = last_report;
+    energy_budget budget = {0, 0, 0, 0, 0};
     long long rate_s0 = 0;
 
     /* The steps that end at a stats row are timed stage by stage (the device finishing after
@@ -238,8 +293,8 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
             int worst = 0;
             double ke;
             if ((rc = sim_stats_energy(m, &ke, &worst, err)) != PD_OK) goto done;
-            if (step == 0) ebound = energy_bound(m, ke);
-            if (!isfinite(ke) || ke > ebound) {
+            if (step == 0) budget = energy_of(m, ke);
+            if (!isfinite(ke) || ke > energy_bound(&budget, t)) {
                 rc = pd_error_set(err, PD_EDIVERGED,
                                   "run diverged at step %lld (t = %.6g s): %s; particle %d has "
                                   "the largest kinetic energy. Reduce dt (now %g s) or check "

@@ -395,8 +395,18 @@ TEST(particle_inside_wall_is_refused)
     pd_diags d = {0, 0, NULL};
     pd_error err = {0};
     sim *m = NULL;
+    /* validation refuses it first, naming the particle's field */
+    CHECK_EQ_INT(PD_EINVAL, pd_scenario_parse(json, NULL, &s, &d, &err));
+    CHECK(d.n == 1 && !strcmp(d.items[0].path, "/particles/0/list/0/position") &&
+          strstr(d.items[0].msg, "inside wall 'floor'"));
+    pd_diags_free(&d);
+    /* and a run (which validation skips above 2e5 particles): the same scenario, valid, with
+     * its particle moved into the floor after parsing */
+    cube_json(json, sizeof json, 1e-5, sunk, 0, 0.5, 0.5, NULL);
     CHECK_EQ_INT(PD_OK, pd_scenario_parse(json, NULL, &s, &d, &err));
     pd_diags_free(&d);
+    if (!s) return;
+    memcpy(s->group[0].list[0].position, inside, sizeof inside);
     CHECK_EQ_INT(PD_EINVAL, sim_create(dev, s, &m, &err));
     printf("  %s\n", err.msg);
     CHECK(strstr(err.msg, "particle 0") && strstr(err.msg, "inside wall 'floor'"));
