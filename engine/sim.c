@@ -130,13 +130,15 @@ typedef struct energy_budget {
 
 /*
  * The energy a scenario can supply: the initial kinetic energy; what moving walls and a flow can
- * give (every particle at twice their speed); what initial overlaps and cohesion store (bounded
- * by 1/2 M c^2, c = sqrt(E / rho) the slowest material's wave speed: an overlap of a particle's
- * size stores about E V, and DEM particles never outrun their wave speed, where a runaway soon
- * does); and gravity's work over the scene's height (particles, their sizes and the walls) or
- * over the fall since the start, whichever is larger (particles need not land).
+ * give (every particle at twice their speed); when it starts with contacts or has cohesion
+ * (stored), what overlaps and cohesion hold, bounded by 1/2 M c^2 with c = sqrt(E / rho) the
+ * slowest material's wave speed (an overlap of a particle's size stores about E V, and DEM
+ * particles never outrun their wave speed); and gravity's work over the scene's height
+ * (particles, their sizes and the walls) or over the fall since the start, whichever is larger
+ * (particles need not land). The wave-speed term is left out where nothing is stored at the
+ * start, so that a contact that blows up (a dt far too large) is caught at once.
  */
-static energy_budget energy_of(const sim *m, double ke0)
+static energy_budget energy_of(const sim *m, double ke0, int stored)
 {
     const pd_scenario *s = m->s;
     energy_budget b = {0, 0, 0, 0, 0};
@@ -181,7 +183,7 @@ static energy_budget energy_of(const sim *m, double ke0)
         b.h += (hi[k] - lo[k]) * (hi[k] - lo[k]);
     b.h = sqrt(b.h);
     b.mg = mass * b.g;
-    b.fixed = ke0 + 2 * mass * vw * vw + (isfinite(c2) ? 0.5 * mass * c2 : 0);
+    b.fixed = ke0 + 2 * mass * vw * vw + (stored && isfinite(c2) ? 0.5 * mass * c2 : 0);
     return b;
 }
 
@@ -280,6 +282,10 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
     double interval = opt->progress_interval > 0 ? opt->progress_interval : 0.5;
     double last_report = now_seconds(), rate_t0 = last_report;
     energy_budget budget = {0, 0, 0, 0, 0};
+    double ke0 = 0;
+    int cohesive = 0;
+    for (int i = 0; i < s->nint; i++)
+        cohesive |= s->inter[i].cohesion > 0;
     long long rate_s0 = 0;
 
     /* The steps that end at a stats row are timed stage by stage (the device finishing after
@@ -293,8 +299,8 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
             int worst = 0;
             double ke;
             if ((rc = sim_stats_energy(m, &ke, &worst, err)) != PD_OK) goto done;
-            if (step == 0) budget = energy_of(m, ke);
-            if (!isfinite(ke) || ke > energy_bound(&budget, t)) {
+            if (step == 0) ke0 = ke; /* the budget needs the contacts, counted below */
+            if (!isfinite(ke) || (step > 0 && ke > energy_bound(&budget, t))) {
                 rc = pd_error_set(err, PD_EDIVERGED,
                                   "run diverged at step %lld (t = %.6g s): %s; particle %d has "
                                   "the largest kinetic energy. Reduce dt (now %g s) or check "
@@ -313,6 +319,7 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
             double ratio;
             rc = sim_stats_contacts(m, &contacts, &ratio, h.wall_force, err);
             if (rc != PD_OK) goto done;
+            if (step == 0) budget = energy_of(m, ke0, contacts > 0 || cohesive);
             pr.contacts = contacts;
             pr.broad_pairs = m->npairs;
             rc = rh5_write_stats(w, t, step, pr.kinetic_energy, contacts, m->npairs, ratio,
