@@ -292,10 +292,15 @@ static int cmd_validate(int argc, char **argv)
     if (json) {
         printf("{\"valid\": true, \"particles\": %ld, \"shapes\": %d, \"materials\": %d, "
                "\"walls\": %d, \"dt_s\": %.17g, \"duration_s\": %.17g, \"steps\": %ld, "
-               "\"dt_stable_s\": %.17g, \"dt_rayleigh_s\": %.17g, \"hertz_contact_time_s\": "
-               "%.17g, \"memory_bytes\": %.0f, \"contact_resolution_m\": %.17g}\n",
+               "\"dt_stable_s\": %.17g, \"dt_rayleigh_s\": %.17g, \"hertz_contact_time_s\": ",
                m.particles, m.shapes, m.materials, m.walls, m.dt, m.duration, m.steps, m.dt_stable,
-               m.dt_rayleigh, isfinite(m.dt_hertz) ? m.dt_hertz : -1, m.memory_bytes,
+               m.dt_rayleigh);
+        /* null when no pair has a Hertz contact (as the daemon's dt_hertz) */
+        if (isfinite(m.dt_hertz))
+            printf("%.17g", m.dt_hertz);
+        else
+            printf("null");
+        printf(", \"memory_bytes\": %.0f, \"contact_resolution_m\": %.17g}\n", m.memory_bytes,
                m.contact_resolution);
     } else {
         printf("%s: valid\n", file);

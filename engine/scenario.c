@@ -524,6 +524,9 @@ static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
             diag(p, c, "%s", err.msg);
         }
     } else if (file) {
+        /* a builtin's parameters mean nothing to a file: an error, not silently ignored */
+        if (json_object_get(v, "seed") || json_object_get(v, "triangles"))
+            diag(p, at, "\"seed\" and \"triangles\" belong to a \"builtin\" shape, not a \"mesh\"");
         m = load_mesh_file(p, file, at);
     } else {
         json_t *tris = json_object_get(v, "triangles");
@@ -900,6 +903,7 @@ static void parse_rest(sc_parse *p, json_t *root)
     static const double g0[3] = {0, 0, -9.81}, zero[3] = {0, 0, 0};
     pd_scenario *s = p->s;
     const char *name = str(p, root, "", "name", 0);
+    if (name && !name[0]) diag(p, "/name", "must not be empty (omit it for \"scenario\")");
     copy_name(s->name, name ? name : "scenario", p, "/name", 0);
     const char *prec = str(p, root, "", "precision", 0);
     s->double_precision = 1;

@@ -324,6 +324,17 @@ TEST(validate_refuses_what_run_cannot_do)
                  "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
                  "\"shapes\": {\"s\": {\"builtin\": \"cube\", \"seed\": 3}}," BASE_GROUP,
                  "/shapes/s/seed", "only a \"rock\"");
+    /* a builtin's parameters on a mesh file, and an empty scenario name (schema: minLength 1) */
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"mesh\": \"/nonexistent.stl\", \"seed\": 3}}," BASE_GROUP,
+                 "/shapes/s", "belong to a \"builtin\"");
+    expect_error("{\"name\": \"\", \"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/name", "must not be empty");
     /* a run shorter than one step */
     expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 1e-7},"
                  "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
