@@ -296,6 +296,8 @@ ids=()
 states=()
 timed_out=0
 finish() { # [EXIT_STATUS]
+    # a signal's trap may run this inside `IFS=<separator> read`, whose IFS would still hold
+    local IFS=$' \t\n'
     local csv="$tmp/out.csv" i st bad=0 left=() auth=""
     jq -r '(["job_id"] + map(.pointer) + ["status", "final_kinetic_energy_J", "peak_contacts", "peak_wall_force_N"])
         | map(tostring | if test("[,\"\n]") then "\"" + gsub("\""; "\"\"") + "\"" else . end) | join(",")' \
@@ -344,7 +346,9 @@ finish() { # [EXIT_STATUS]
             else auth=" -H 'Authorization: Bearer TOKEN'"; fi
         fi
         echo "$prog: $sweep_id: ${#left[@]} jobs still queued or running; they go on (the dashboard shows them at $server/index.html?tag=$sweep_id). To cancel them:" >&2
-        echo "  for id in ${left[*]}; do curl -sS -X POST$auth $server/v1/jobs/\$id/cancel; echo; done" >&2
+        # joined with spaces whatever IFS holds (the status reads set it to a separator)
+        ids_text=$(printf '%s ' "${left[@]}")
+        echo "  for id in ${ids_text% }; do curl -sS -X POST$auth $server/v1/jobs/\$id/cancel; echo; done" >&2
     fi
     [ "$timed_out" -eq 0 ] || bad=1
     exit "${1:-$bad}"
