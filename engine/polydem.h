@@ -116,6 +116,13 @@ typedef struct pd_pose {
     double q[4];
 } pd_pose;
 
+/*
+ * The number of result files HDF5 could not close (a disk that filled up under a run). HDF5 keeps
+ * them open, and its own clean-up at exit then crashes on them; a program for which this is not
+ * 0 should end with _exit (after flushing its streams) instead of returning from main.
+ */
+int pd_results_unclosed(void);
+
 /* q / |q| into out (which may be q), exact in range for any finite q (no overflow of the squares).
  * Returns PD_EINVAL for a zero or non-finite quaternion. */
 int pd_quat_normalize(const double q[4], double out[4]);

@@ -702,6 +702,15 @@ int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_e
 /* ---- lifecycle ----------------------------------------------------------------------------- */
 
 /* Closes every HDF5 object and the file; 0 when all closed cleanly. */
+/* Files whose H5Fclose failed (a full disk): HDF5 keeps them open, and its own exit-time
+ * cleanup then crashes or loops on them (pd_results_unclosed). */
+static int unclosed_files;
+
+int pd_results_unclosed(void)
+{
+    return unclosed_files;
+}
+
 static int close_file(rh5_writer *w)
 {
     int ok = 1;
@@ -713,7 +722,10 @@ static int close_file(rh5_writer *w)
         if (close_ext(&w->walls[i].force) < 0) ok = 0;
     for (int k = 0; k < RH5_NSTAGES; k++)
         if (close_ext(&w->stage[k]) < 0) ok = 0;
-    if (w->file >= 0 && H5Fclose(w->file) < 0) ok = 0;
+    if (w->file >= 0 && H5Fclose(w->file) < 0) {
+        ok = 0;
+        unclosed_files++;
+    }
     w->file = -1;
     return ok ? 0 : -1;
 }
@@ -869,12 +881,16 @@ int rh5_finish(rh5_writer *w, const char *status, const char *message, pd_error 
     char *xmf = malloc(len + sizeof ".xmf"), *xtmp = malloc(len + sizeof ".xmf.partial");
     if ((!xmf || !xtmp) && rc == PD_OK)
         rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory", w->path);
+    /* The XDMF file is derived from the result: failing to write it (a full disk: it is larger
+     * than the result) must not cost the result itself, which is still renamed into place. */
+    pd_error xerr = {0};
+    int xrc = PD_OK;
     if (rc == PD_OK) {
         snprintf(xmf, len + sizeof ".xmf", "%s.xmf", w->path);
         snprintf(xtmp, len + sizeof ".xmf.partial", "%s.xmf.partial", w->path);
         rh5_xdmf x = {w->base,    w->path,  w->n,       w->fields,
                       w->nframes, w->times, w->mesh_nv, w->mesh_nt};
-        rc = rh5_write_xdmf(xtmp, &x, err);
+        xrc = rh5_write_xdmf(xtmp, &x, &xerr);
     }
     int kept = 0; /* the result is whole, only its final name could not be given */
     if (rc == PD_OK && rename(w->partial, w->path) != 0) {
@@ -883,7 +899,12 @@ int rh5_finish(rh5_writer *w, const char *status, const char *message, pd_error 
                           "%s: cannot rename '%s' to it: %s; the whole result is kept as '%s'",
                           w->path, w->partial, strerror(errno), w->partial);
     }
-    if (rc == PD_OK && rename(xtmp, xmf) != 0) {
+    if (rc == PD_OK && xrc != PD_OK) {
+        rc = pd_error_set(err, PD_EIO,
+                          "%s: the result is complete and kept, but its XDMF file for ParaView "
+                          "could not be written: %s",
+                          w->path, xerr.msg);
+    } else if (rc == PD_OK && rename(xtmp, xmf) != 0) {
         rc = pd_error_set(err, PD_EIO, "%s: cannot rename '%s' to '%s': %s", w->path, xtmp, xmf,
                           strerror(errno));
     }

@@ -5,6 +5,7 @@
 #include "util.h"
 
 #include <arpa/inet.h>
+#include <sys/resource.h>
 #include <ctype.h>
 #include <errno.h>
 #include <netdb.h>
@@ -583,15 +584,30 @@ int http_start(app *a, struct MHD_Daemon **out, unsigned *port, char *msg, size_
                  a->cfg->listen);
         return -1;
     }
+    /* Each connection holds a descriptor: more connections than the process may open left MHD
+     * spinning on accept (a 100 % core and gigabytes of "busy waiting" log at `ulimit -n 20`).
+     * Keep 64 for the database, results, meshes and OpenCL. */
+    unsigned max_conn = (unsigned)a->cfg->max_connections;
+    struct rlimit nofile;
+    if (getrlimit(RLIMIT_NOFILE, &nofile) == 0 && nofile.rlim_cur != RLIM_INFINITY) {
+        rlim_t room = nofile.rlim_cur > 80 ? nofile.rlim_cur - 64 : 16;
+        if ((rlim_t)max_conn > room) {
+            fprintf(stderr,
+                    "polydemd: max_connections %u lowered to %u: the process may open %llu "
+                    "files (ulimit -n)\n",
+                    max_conn, (unsigned)room, (unsigned long long)nofile.rlim_cur);
+            max_conn = (unsigned)room;
+        }
+    }
     MHD_set_panic_func(on_panic, NULL);
     unsigned flags = MHD_USE_AUTO_INTERNAL_THREAD | MHD_ALLOW_SUSPEND_RESUME | MHD_USE_ERROR_LOG;
     if (v6) flags |= MHD_USE_IPv6;
     struct MHD_Daemon *d = MHD_start_daemon(
         flags, 0, NULL, NULL, on_request, a, MHD_OPTION_EXTERNAL_LOGGER, on_log, NULL,
         MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss, MHD_OPTION_THREAD_POOL_SIZE,
-        (unsigned)a->cfg->http_threads, MHD_OPTION_CONNECTION_LIMIT,
-        (unsigned)a->cfg->max_connections, MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120,
-        MHD_OPTION_NOTIFY_COMPLETED, on_completed, a, MHD_OPTION_END);
+        (unsigned)a->cfg->http_threads, MHD_OPTION_CONNECTION_LIMIT, max_conn,
+        MHD_OPTION_CONNECTION_TIMEOUT, (unsigned)120, MHD_OPTION_NOTIFY_COMPLETED, on_completed, a,
+        MHD_OPTION_END);
     if (!d) {
         snprintf(msg, ml, "cannot listen on '%s' (address in use, or not allowed)", a->cfg->listen);
         return -1;

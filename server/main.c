@@ -6,6 +6,7 @@
  */
 #define _DEFAULT_SOURCE /* realpath, flock */
 #include "api.h"
+#include "polydem.h"
 #include "config.h"
 #include "http.h"
 #include "util.h"
@@ -154,6 +155,7 @@ int main(int argc, char **argv)
     sigemptyset(&stop);
     sigaddset(&stop, SIGTERM);
     sigaddset(&stop, SIGINT);
+    sigaddset(&stop, SIGHUP); /* a closed terminal: shut down cleanly rather than die mid-job */
     if (pthread_sigmask(SIG_BLOCK, &stop, NULL) != 0 || signal(SIGPIPE, SIG_IGN) == SIG_ERR) {
         fprintf(stderr, "polydemd: cannot set up signal handling\n");
         return 1;
@@ -172,11 +174,14 @@ int main(int argc, char **argv)
     }
     int requeued = 0, cancelled = 0, failed = 0;
     if (job_store_recover(a.st, &requeued, &cancelled, &failed) != JS_OK) goto out;
-    if (requeued || cancelled || failed)
+    if (requeued || cancelled)
+        fprintf(stderr, "polydemd: recovered after a crash: %d job(s) queued again, %d cancelled\n",
+                requeued, cancelled);
+    if (failed)
         fprintf(stderr,
-                "polydemd: recovered after a crash: %d job(s) queued again, %d cancelled, %d "
-                "failed (the daemon had died in them %d times)\n",
-                requeued, cancelled, failed, JS_MAX_CRASHES);
+                "polydemd: recovered after a crash: %d job(s) failed, the daemon having died "
+                "while running each of them %d times\n",
+                failed, JS_MAX_CRASHES);
     sweep(a.st, a.results_dir, a.meshes_dir);
     static const char *const dash[] = {"../clients/dashboard", "../../clients/dashboard",
                                        "../share/polydem/dashboard"};
@@ -209,7 +214,10 @@ int main(int argc, char **argv)
     int sig = 0;
     while (sigwait(&stop, &sig) != 0) {
     }
-    fprintf(stderr, "polydemd: %s: shutting down\n", sig == SIGTERM ? "SIGTERM" : "SIGINT");
+    fprintf(stderr, "polydemd: %s: shutting down\n",
+            sig == SIGTERM  ? "SIGTERM"
+            : sig == SIGHUP ? "SIGHUP"
+                            : "SIGINT");
     http_quiesce(d);
     worker_stop(a.w); /* the running job stops at a safe point and is queued again */
     sse_close_all(a.hub);
@@ -226,5 +234,10 @@ out:
     job_store_close(a.st);
     auth_free(a.auth);
     if (lock >= 0) close(lock);
+    if (pd_results_unclosed()) { /* a disk filled up under a job: HDF5's exit clean-up would crash
+                                  */
+        fflush(NULL);
+        _exit(rc);
+    }
     return rc;
 }

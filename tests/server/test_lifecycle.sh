@@ -125,7 +125,7 @@ done
 code=$(req GET "/v1/jobs/$l4")
 check thrice_crashed_job_failed "200 failed" "$code $(jstr status)"
 check thrice_crashed_job_says_why true "$(jstr error | grep -q 'while running this job 3 times' && echo true)"
-check thrice_crashed_logged true "$(grep -q '1 failed' "$LOG" && echo true)"
+check thrice_crashed_logged true "$(grep -q '1 job(s) failed' "$LOG" && echo true)"
 stop_daemon TERM && ok sigterm_idle_exit_0
 
 summary
