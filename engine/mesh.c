@@ -231,6 +231,14 @@ static int check_edges(const double *verts, const int *tris, int ntris, const ch
 
 /* ---- shells ---------------------------------------------------------------------------------- */
 
+/* Reverses triangle t's orientation (its outward side). */
+static void flip_triangle(int *tris, int t)
+{
+    int s = tris[3 * t + 1];
+    tris[3 * t + 1] = tris[3 * t + 2];
+    tris[3 * t + 2] = s;
+}
+
 static int shell_find(int *par, int x)
 {
     while (par[x] != x) {
@@ -336,24 +344,17 @@ static int orient_shells(const double *verts, int *tris, int ntris, edge_rec *e,
         }
         for (int k = 0; k < nshell && rc == PD_OK; k++) {
             const double *p = vtx(verts, first[k]);
-            int depth = 0, outer = -1;
+            int depth = 0;
             for (int o = 0; o < nshell; o++) {
                 if (o == k || p[0] < box[6 * o] || p[0] > box[6 * o + 3] || p[1] < box[6 * o + 1] ||
                     p[1] > box[6 * o + 4] || p[2] < box[6 * o + 2] || p[2] > box[6 * o + 5])
                     continue;
-                if (shell_contains(verts, tris, shell_of, o, ntris, p)) {
-                    depth++;
-                    outer = o;
-                }
+                depth += shell_contains(verts, tris, shell_of, o, ntris, p);
             }
             int out = vol[k] > 0;
             if (depth == 0 && !out) {
                 for (int t = 0; t < ntris; t++)
-                    if (shell_of[t] == k) {
-                        int sw = tris[3 * t + 1];
-                        tris[3 * t + 1] = tris[3 * t + 2];
-                        tris[3 * t + 2] = sw;
-                    }
+                    if (shell_of[t] == k) flip_triangle(tris, t);
             } else if (depth > 0 && out != (depth % 2 == 0)) {
                 rc = pd_error_set(err, PD_EMESH,
                                   "%s: a shell (%d of %d, through (%g,%g,%g)) lies inside another "
@@ -362,7 +363,6 @@ static int orient_shells(const double *verts, int *tris, int ntris, edge_rec *e,
                                   "solid",
                                   label, k + 1, nshell, p[0], p[1], p[2],
                                   out ? "outward" : "inward");
-                (void)outer;
             }
         }
         free(vol);
@@ -463,11 +463,8 @@ int mesh_finish(double *verts, int nverts, int *tris, int ntris, const char *lab
     }
     if (vol < 0) {
         /* Consistently inward: the usual export mistake, fixed rather than rejected. */
-        for (int t = 0; t < ntris; t++) {
-            int s = tris[3 * t + 1];
-            tris[3 * t + 1] = tris[3 * t + 2];
-            tris[3 * t + 2] = s;
-        }
+        for (int t = 0; t < ntris; t++)
+            flip_triangle(tris, t);
     }
     if ((rc = orient_shells(verts, tris, ntris, edges, label, err)) != PD_OK) goto fail;
 

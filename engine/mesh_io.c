@@ -499,12 +499,16 @@ static int has_ext(const char *path, const char *ext)
     return dot && strcasecmp(dot, ext) == 0;
 }
 
+/* A binary STL's size is exactly determined by its triangle count. */
+static int binary_stl_size(const char *buf, size_t len)
+{
+    return len >= 84 && 84 + 50 * (size_t)get_le32((const unsigned char *)buf + 80) == len;
+}
+
 static int detect_format(const char *path, const char *buf, size_t len)
 {
-    /* A binary STL's size is exactly determined by its triangle count; some binary files start
-     * with "solid" in their header, so the size decides first. */
-    if (len >= 84 && 84 + 50 * (size_t)get_le32((const unsigned char *)buf + 80) == len)
-        return FMT_STL_BINARY;
+    /* some binary files start with "solid" in their header, so the size decides first */
+    if (binary_stl_size(buf, len)) return FMT_STL_BINARY;
     if (looks_like_text(buf, len)) {
         const char *pos = buf, *end = buf + len;
         while (pos < end) {
@@ -539,7 +543,7 @@ int pd_mesh_load(const char *path, pd_mesh **out, pd_error *err)
      * STL is recognised by its size first, so its header's bytes are never taken for one */
     size_t bom = len >= 3 && !memcmp(buf, "\xEF\xBB\xBF", 3) ? 3 : 0;
     int fmt = detect_format(path, buf, len);
-    if (bom && !(len >= 84 && 84 + 50 * (size_t)get_le32((const unsigned char *)buf + 80) == len))
+    if (bom && !binary_stl_size(buf, len))
         fmt = detect_format(path, buf + bom, len - bom);
     else
         bom = 0;

@@ -56,7 +56,9 @@ static double draw_size(rng *r, const sc_size *z)
          * draws almost never land and every particle used to get the mean) uniform draws over
          * [min, max] kept with the normal's density relative to its peak there, which is exact
          * and, for a wide std, accepts nearly all */
-        if (!(z->std > 0)) return z->mean < z->min ? z->min : z->mean > z->max ? z->max : z->mean;
+        /* the mean kept in [min, max]: the normal's peak there, and the answer of last resort */
+        double peak = z->mean < z->min ? z->min : z->mean > z->max ? z->max : z->mean;
+        if (!(z->std > 0)) return peak;
         double a = (z->min - z->mean) / z->std, b = (z->max - z->mean) / z->std;
         double mass = 0.5 * (erfc(-b / sqrt(2.0)) - erfc(-a / sqrt(2.0)));
         if (mass >= 0.05) {
@@ -65,14 +67,13 @@ static double draw_size(rng *r, const sc_size *z)
                 if (d >= z->min && d <= z->max) return d;
             }
         } else {
-            double peak = z->mean < z->min ? z->min : z->mean > z->max ? z->max : z->mean;
             double hp = (peak - z->mean) / z->std;
             for (int tries = 0; tries < 100000; tries++) {
                 double d = z->min + (z->max - z->min) * rng_unit(r), h = (d - z->mean) / z->std;
                 if (rng_unit(r) < exp(-0.5 * (h * h - hp * hp))) return d;
             }
         }
-        return z->mean < z->min ? z->min : z->mean > z->max ? z->max : z->mean;
+        return peak;
     }
     default:
         return z->mean;

@@ -1003,15 +1003,8 @@ static void check_extremes(sc_parse *p)
     double big = s->double_precision ? 1e300 : 1e36, tiny = 1 / big, dall = 0;
     for (int i = 0; i < s->ngroup; i++) {
         const sc_group *g = &s->group[i];
-        double dmin = g->size.min, dmax = g->size.max;
-        if (g->list) {
-            dmin = INFINITY;
-            dmax = 0;
-            for (long k = 0; k < g->count; k++) {
-                dmin = fmin(dmin, g->list[k].size);
-                dmax = fmax(dmax, g->list[k].size);
-            }
-        }
+        double dmin, dmax;
+        sc_group_sizes(g, &dmin, &dmax);
         if (g->material < 0 || !(dmax > 0)) continue;
         dall = fmax(dall, dmax);
         double rho = s->mat[g->material].density, k = rho * PI / 6; /* mass = k d^3 */
@@ -1070,8 +1063,9 @@ static void check_walls_clear(sc_parse *p)
         wall_tree t;
         if (!me ||
             wall_tree_build(me->verts, me->tris, me->ntris, &t, s->wall[w].name, &err) != PD_OK)
-            continue; /* out of memory: the run will say so */
-        long i = wall_tree_first_inside(&t, me->verts, me->tris, pa->x, pa->n);
+            continue;                             /* out of memory: the run will say so */
+        static const double world[3] = {0, 0, 0}; /* the tree is built in world coordinates */
+        long i = wall_tree_first_inside(&t, me->verts, me->tris, pa->x, pa->n, world);
         wall_tree_free(&t);
         if (i < 0) continue;
         long first = 0;

@@ -98,6 +98,9 @@ struct pd_scenario {
 /* The interaction of materials a and b, or NULL. */
 const sc_interaction *sc_interaction_of(const pd_scenario *s, int a, int b);
 
+/* Smallest and largest diameters of a group, m (a listed group has at least one particle). */
+void sc_group_sizes(const sc_group *g, double *dmin, double *dmax);
+
 /* The steps a run of `duration` takes at dt (pd_run and pd_scenario_summarize agree on it). */
 long long sc_steps(double duration, double dt);
 

@@ -14,8 +14,7 @@
 
 static const double PI = 3.14159265358979323846;
 
-/* Smallest and largest diameters of a group, m. */
-static void group_sizes(const sc_group *g, double *dmin, double *dmax)
+void sc_group_sizes(const sc_group *g, double *dmin, double *dmax)
 {
     if (!g->list) {
         *dmin = g->size.min;
@@ -35,7 +34,7 @@ static double group_speed(const pd_scenario *s, const sc_group *g)
     double rr = g->shape >= 0 ? s->shape[g->shape].radius_ratio : 0.5, vmax = 0;
     if (!g->list) {
         double dmin, dmax;
-        group_sizes(g, &dmin, &dmax);
+        sc_group_sizes(g, &dmin, &dmax);
         return sqrt(g->velocity[0] * g->velocity[0] + g->velocity[1] * g->velocity[1] +
                     g->velocity[2] * g->velocity[2]) +
                sqrt(g->angular_velocity[0] * g->angular_velocity[0] +
@@ -85,7 +84,7 @@ void sc_dt_estimates(const pd_scenario *s, double *rayleigh, double *hertz, doub
         if (g->material < 0) continue;
         const sc_material *m = &s->mat[g->material];
         double dmin, dmax;
-        group_sizes(g, &dmin, &dmax);
+        sc_group_sizes(g, &dmin, &dmax);
         /* Rayleigh wave time across the smallest particle (radius of the volume-equivalent
          * sphere): pi R sqrt(rho / G) / (0.1631 nu + 0.8766) */
         double t = PI * 0.5 * dmin * sqrt(m->density / m->shear_modulus) /
@@ -127,13 +126,13 @@ void sc_dt_estimates(const pd_scenario *s, double *rayleigh, double *hertz, doub
         const sc_group *a = &s->group[i];
         if (a->material < 0) continue;
         double da, dx;
-        group_sizes(a, &da, &dx);
+        sc_group_sizes(a, &da, &dx);
         double ma = s->mat[a->material].density * PI / 6 * da * da * da, ra = 0.5 * da;
         for (int j = i; j < s->ngroup; j++) {
             const sc_group *b = &s->group[j];
             if (b->material < 0) continue;
             double db;
-            group_sizes(b, &db, &dx);
+            sc_group_sizes(b, &db, &dx);
             double mb = s->mat[b->material].density * PI / 6 * db * db * db, rb = 0.5 * db;
             const sc_interaction *x = sc_interaction_of(s, a->material, b->material);
             if (!x) continue;

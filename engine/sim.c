@@ -187,6 +187,14 @@ static energy_budget energy_of(const sim *m, double ke0, int stored)
     return b;
 }
 
+/* An interval in whole steps, at least one: the nearest, halves up even where the quotient
+ * rounds below them (0.00015 / 1e-4 = 1.4999999999999998: every 2 steps, not every step). */
+static long long steps_per(double interval, double dt)
+{
+    long long n = (long long)floor(interval / dt * (1 + 1e-12) + 0.5);
+    return n < 1 ? 1 : n;
+}
+
 /* Energy a run may reach at time t without something being wrong: 10x what it can supply. */
 static double energy_bound(const energy_budget *b, double t)
 {
@@ -270,12 +278,8 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
     if ((rc = open_result(m, opt, &w, err)) != PD_OK) goto done;
 
     long long steps = sc_steps(s->duration, s->dt);
-    /* intervals to the nearest whole step, halves up even where the quotient rounds below them
-     * (0.00015 / 1e-4 = 1.4999999999999998: every 2 steps, not every step) */
-    long long stats_every = (long long)floor(s->stats_interval / s->dt * (1 + 1e-12) + 0.5);
-    long long frame_every = (long long)floor(s->output_interval / s->dt * (1 + 1e-12) + 0.5);
-    if (stats_every < 1) stats_every = 1;
-    if (frame_every < 1) frame_every = 1;
+    long long stats_every = steps_per(s->stats_interval, s->dt);
+    long long frame_every = steps_per(s->output_interval, s->dt);
     pr.steps_total = steps;
     pr.sim_duration = (double)steps * s->dt;
     pr.particles = m->n;

@@ -226,19 +226,13 @@ static int upload_wall_trees(sim *m, const double *vert, const int *tri, const i
         noff[w + 1] = noff[w] + t[w].nnode;
         /* a particle that starts with its centre inside a wall would never be pushed out along
          * any sensible normal: refuse the scenario, naming both */
-        wb_tree wt = {t[w].box, t[w].kid, t[w].order, v, tr};
-        for (long i = 0; i < m->p->n && rc == PD_OK; i++) {
-            const double *x = m->p->x + 3 * i, *c0 = m->wall_c0 + 3 * w;
-            pd_v3 pl = v3(x[0] - c0[0], x[1] - c0[1], x[2] - c0[2]);
-            const double *b = t[w].box;
-            if (pl.x < b[0] || pl.x > b[3] || pl.y < b[1] || pl.y > b[4] || pl.z < b[2] ||
-                pl.z > b[5])
-                continue;
-            if (cp_inside_tree(&wt, pl))
-                rc = pd_error_set(err, PD_EINVAL,
-                                  "/particles: particle %ld starts with its centre (%g, %g, %g) "
-                                  "m inside wall '%s': move the particles or the wall",
-                                  i, x[0], x[1], x[2], s->wall[w].name);
+        long i = wall_tree_first_inside(&t[w], v, tr, m->p->x, m->p->n, m->wall_c0 + 3 * w);
+        if (i >= 0) {
+            const double *x = m->p->x + 3 * i;
+            rc = pd_error_set(err, PD_EINVAL,
+                              "/particles: particle %ld starts with its centre (%g, %g, %g) m "
+                              "inside wall '%s': move the particles or the wall",
+                              i, x[0], x[1], x[2], s->wall[w].name);
         }
         if (rc != PD_OK) break;
         int near = wall_tree_max_near(&t[w], v, tr, nt, side);

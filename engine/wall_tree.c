@@ -217,15 +217,16 @@ int wall_tree_max_near(const wall_tree *t, const double *vert, const int *tri, i
 }
 
 long wall_tree_first_inside(const wall_tree *t, const double *vert, const int *tri,
-                            const double *pts, long n)
+                            const double *pts, long n, const double origin[3])
 {
     wb_tree wt = {t->box, t->kid, t->order, vert, tri};
     const double *b = t->box;
     for (long i = 0; i < n; i++) {
         const double *x = pts + 3 * i;
-        if (x[0] < b[0] || x[0] > b[3] || x[1] < b[1] || x[1] > b[4] || x[2] < b[2] || x[2] > b[5])
+        pd_v3 p = v3(x[0] - origin[0], x[1] - origin[1], x[2] - origin[2]);
+        if (p.x < b[0] || p.x > b[3] || p.y < b[1] || p.y > b[4] || p.z < b[2] || p.z > b[5])
             continue;
-        if (cp_inside_tree(&wt, v3(x[0], x[1], x[2]))) return i;
+        if (cp_inside_tree(&wt, p)) return i;
     }
     return -1;
 }

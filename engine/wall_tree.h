@@ -33,9 +33,10 @@ void wall_tree_free(wall_tree *t);
  */
 int wall_tree_max_near(const wall_tree *t, const double *vert, const int *tri, int nt, double side);
 
-/* The first of n points (xyz, in the tree's frame) inside the closed mesh the tree was built on
- * (vert, tri), by the kernels' own ray parity (cp_inside_tree); -1 when none is. */
+/* The first of n points (xyz, taken relative to origin: the tree's frame) inside the closed mesh
+ * the tree was built on (vert, tri), by the kernels' own ray parity (cp_inside_tree); -1 when
+ * none is. */
 long wall_tree_first_inside(const wall_tree *t, const double *vert, const int *tri,
-                            const double *pts, long n);
+                            const double *pts, long n, const double origin[3]);
 
 #endif

@@ -140,6 +140,24 @@ sweep_started() { # STDERR_FILE N
     return 1
 }
 
+# interrupted_sweep NAME CMD...: runs a two-point sweep command in the background (its CSV in
+# $tmp/int.csv, its stderr in $tmp/int.err), sends it SIGTERM once both jobs are submitted, and
+# checks NAME_exit_status (143) and NAME_rows (both points still queued); sets sid to its id.
+interrupted_sweep() {
+    name=$1
+    shift
+    # (--foreground: a plain timeout passes the signal on to its whole process group as well,
+    # and a second signal ends a sweep at once, without its CSV)
+    timeout --foreground 60 "$@" --out "$tmp/int.csv" 2>"$tmp/int.err" &
+    int_pid=$!
+    sid=$(sweep_started "$tmp/int.err" 2)
+    kill -TERM "$int_pid"
+    wait "$int_pid"
+    check "${name}_exit_status" 143 "$?"
+    check "${name}_rows" "queued queued" \
+        "$(tail -n +2 "$tmp/int.csv" 2>/dev/null | cut -d, -f3 | tr '\n' ' ' | sed 's/ $//')"
+}
+
 summary() {
     if [ "$failed" -ne 0 ] && [ -s "$tmp/polydemd.log" ]; then
         echo "-- polydemd log (last 15 lines):"

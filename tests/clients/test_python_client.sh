@@ -165,17 +165,8 @@ if start_daemon; then
     first=$(api "/v1/jobs?tag=$sid" | jq -r '.jobs | sort_by(.name) | .[0].id')
     api "/v1/jobs/$first/cancel" -o /dev/null -X POST
     api "/v1/jobs/$first" -o /dev/null -X DELETE
-    # (--foreground: a plain timeout passes the signal on to its whole process group as well,
-    # and a second signal ends a sweep at once, without its CSV)
-    timeout --foreground 60 python3 -B "$CLIENT" --server "$URL" sweep "$tmp/quick.json" --set '/seed=1,2' --poll 0.3 \
-        --out "$tmp/int.csv" 2>"$tmp/int.err" &
-    int_pid=$!
-    sid=$(sweep_started "$tmp/int.err" 2)
-    kill -TERM "$int_pid"
-    wait "$int_pid"
-    check sweep_interrupted_exit_status 143 "$?"
-    check sweep_interrupted_rows "queued queued" \
-        "$(tail -n +2 "$tmp/int.csv" 2>/dev/null | cut -d, -f3 | tr '\n' ' ' | sed 's/ $//')"
+    interrupted_sweep sweep_interrupted python3 -B "$CLIENT" --server "$URL" sweep "$tmp/quick.json" \
+        --set '/seed=1,2' --poll 0.3
     hint=$(sed -n 's/^polydem_client: to cancel them: //p' "$tmp/int.err")
     if [ -n "$sid" ] && [ "${hint%" cancel --tag $sid"}" != "$hint" ] && sh -c "$hint" 2>"$tmp/err"; then
         ok sweep_interrupted_says_how_to_cancel; else

@@ -117,17 +117,8 @@ if start_daemon; then
     # interrupted (SIGTERM; a background job here ignores SIGINT) behind a running job: the CSV
     # with the statuses so far, exit 143, and a command that cancels the jobs left
     long=$(long_job_running)
-    # (--foreground: a plain timeout passes the signal on to its whole process group as well,
-    # and a second signal ends a sweep at once, without its CSV)
-    timeout --foreground 60 bash "$SWEEP" --server "$URL" "$tmp/quick.json" --set '/seed=1,2' --poll 0.3 \
-        --out "$tmp/int.csv" 2>"$tmp/int.err" &
-    int_pid=$!
-    sid=$(sweep_started "$tmp/int.err" 2)
-    kill -TERM "$int_pid"
-    wait "$int_pid"
-    check interrupted_exit_status 143 "$?"
-    check interrupted_rows "queued queued" \
-        "$(tail -n +2 "$tmp/int.csv" 2>/dev/null | cut -d, -f3 | tr '\n' ' ' | sed 's/ $//')"
+    interrupted_sweep interrupted bash "$SWEEP" --server "$URL" "$tmp/quick.json" --set '/seed=1,2' \
+        --poll 0.3
     hint=$(grep '^  for id in ' "$tmp/int.err")
     if [ -n "$hint" ] && bash -c "$hint" >"$tmp/cancel.out" 2>&1 && [ "$(grep -c '"status"' "$tmp/cancel.out")" = 2 ]; then
         ok interrupted_says_how_to_cancel; else

@@ -38,6 +38,28 @@ static sc_particles *make(const pd_scenario *s)
     return p;
 }
 
+/* Whether every particle's circumscribed sphere (radius rr x size) lies inside [lo, hi], and no
+ * two of them overlap (to rounding). */
+static void placed(const sc_particles *p, double rr, const double lo[3], const double hi[3],
+                   int *inside, int *apart)
+{
+    *inside = *apart = 1;
+    for (long i = 0; i < p->n; i++) {
+        double ri = rr * p->size[i];
+        for (int k = 0; k < 3; k++)
+            *inside &=
+                p->x[3 * i + k] - ri >= lo[k] - 1e-12 && p->x[3 * i + k] + ri <= hi[k] + 1e-12;
+        for (long j = 0; j < i; j++) {
+            double d2 = 0, rj = rr * p->size[j];
+            for (int k = 0; k < 3; k++) {
+                double t = p->x[3 * i + k] - p->x[3 * j + k];
+                d2 += t * t;
+            }
+            *apart &= d2 >= (ri + rj) * (ri + rj) * (1 - 1e-12);
+        }
+    }
+}
+
 TEST(generated_group_fits_without_overlaps)
 {
     const char *modes[] = {"lattice", "random"};
@@ -57,22 +79,9 @@ TEST(generated_group_fits_without_overlaps)
             continue;
         }
         CHECK_EQ_INT(200, p->n);
-        double rr = s->shape[0].radius_ratio, lo[3] = {0, 0, 0}, hi[3] = {0.2, 0.1, 0.1};
-        int inside = 1, apart = 1;
-        for (long i = 0; i < p->n; i++) {
-            double ri = rr * p->size[i];
-            for (int k = 0; k < 3; k++)
-                inside &=
-                    p->x[3 * i + k] - ri >= lo[k] - 1e-12 && p->x[3 * i + k] + ri <= hi[k] + 1e-12;
-            for (long j = 0; j < i; j++) {
-                double d2 = 0, rj = rr * p->size[j];
-                for (int k = 0; k < 3; k++) {
-                    double t = p->x[3 * i + k] - p->x[3 * j + k];
-                    d2 += t * t;
-                }
-                apart &= d2 >= (ri + rj) * (ri + rj) * (1 - 1e-12);
-            }
-        }
+        double lo[3] = {0, 0, 0}, hi[3] = {0.2, 0.1, 0.1};
+        int inside, apart;
+        placed(p, s->shape[0].radius_ratio, lo, hi, &inside, &apart);
         CHECK(inside); /* every circumscribed sphere inside the region */
         CHECK(apart);  /* and no two of them overlapping */
         pd_scenario_destroy(s);
@@ -107,22 +116,11 @@ TEST(huge_regions_hold_their_groups)
         CHECK_EQ_INT(1000, p->n);
         const sc_group *gr = &s->group[0];
         double r = s->shape[2].radius_ratio * 0.001, mid[3] = {0, 0, 0};
-        int inside = 1, apart = 1;
-        for (long i = 0; i < p->n; i++) {
-            for (int k = 0; k < 3; k++) {
-                double x = p->x[3 * i + k];
-                inside &= x - r >= gr->region_min[k] - 1e-12 && x + r <= gr->region_max[k] + 1e-12;
-                mid[k] += x / (double)p->n;
-            }
-            for (long j = 0; j < i; j++) {
-                double d2 = 0;
-                for (int k = 0; k < 3; k++) {
-                    double t = p->x[3 * i + k] - p->x[3 * j + k];
-                    d2 += t * t;
-                }
-                apart &= d2 >= 4 * r * r * (1 - 1e-12);
-            }
-        }
+        int inside, apart;
+        placed(p, s->shape[2].radius_ratio, gr->region_min, gr->region_max, &inside, &apart);
+        for (long i = 0; i < p->n; i++)
+            for (int k = 0; k < 3; k++)
+                mid[k] += p->x[3 * i + k] / (double)p->n;
         CHECK(inside);
         CHECK(apart);
         /* near the region's centre: within the block's own size (1000 cells of 2r) */
