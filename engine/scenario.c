@@ -962,20 +962,23 @@ static void parse_rest(sc_parse *p, json_t *root)
     }
 }
 
-/* Every pair of materials that can touch needs an interaction. */
+/* Every pair of materials that can touch needs an interaction (a material's own pair only where
+ * it has two particles, or a wall of it). */
 static void check_pairs(sc_parse *p)
 {
     pd_scenario *s = p->s;
-    int used_p[64] = {0}, used_w[64] = {0};
+    long used_p[64] = {0}; /* particles of each material */
+    int used_w[64] = {0};
     for (int g = 0; g < s->ngroup; g++)
-        if (s->group[g].material >= 0 && s->group[g].material < 64)
-            used_p[s->group[g].material] = 1;
+        if (s->group[g].material >= 0 && s->group[g].material < 64 && s->group[g].count > 0)
+            used_p[s->group[g].material] += s->group[g].count;
     for (int w = 0; w < s->nwall; w++)
         if (s->wall[w].material >= 0 && s->wall[w].material < 64) used_w[s->wall[w].material] = 1;
     for (int a = 0; a < s->nmat && a < 64; a++) {
         if (!used_p[a]) continue;
         for (int b = a; b < s->nmat && b < 64; b++)
-            if ((used_p[b] || used_w[b]) && !sc_interaction_of(s, a, b))
+            if ((b == a ? used_p[a] > 1 || used_w[a] : used_p[b] || used_w[b]) &&
+                !sc_interaction_of(s, a, b))
                 diag(p, "/interactions",
                      "no interaction between '%s' and '%s', which can touch: add "
                      "{\"between\": [\"%s\", \"%s\"], ...}",

@@ -167,6 +167,35 @@ static void expect_error(const char *text, const char *path, const char *frag)
     pd_diags_free(&d);
 }
 
+/* A material's own pair needs an interaction only where two of its particles can meet: one
+ * rock dropped on a steel floor needs rock-steel alone; two rocks (two groups of one, or one
+ * group of two) need rock-rock as well. */
+TEST(own_pair_needed_only_for_two_particles)
+{
+#define ONE_ROCK(extra)                                                                            \
+    "{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"                                               \
+    "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7},"                      \
+    " \"steel\": {\"density\": 7800, \"youngs_modulus\": 2e11}},"                                  \
+    "\"interactions\": [{\"between\": [\"rock\", \"steel\"]}],"                                    \
+    "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}},"                                          \
+    "\"walls\": [{\"name\": \"floor\", \"material\": \"steel\", \"box\": {\"min\": "               \
+    "[-1,-1,-1], \"max\": [1,1,0]}}],"                                                             \
+    "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", \"list\": [{\"position\": "        \
+    "[0,0,0.1], \"size\": 0.01}]}" extra "]}"
+    pd_diags d;
+    pd_scenario *s = parse(ONE_ROCK(""), &d);
+    CHECK(s != NULL);
+    pd_scenario_destroy(s);
+    pd_diags_free(&d);
+    expect_error(ONE_ROCK(", {\"shape\": \"s\", \"material\": \"rock\", \"list\": "
+                          "[{\"position\": [0,0,0.3], \"size\": 0.01}]}"),
+                 "/interactions", "no interaction between 'rock' and 'rock'");
+    expect_error(ONE_ROCK(", {\"shape\": \"s\", \"material\": \"rock\", \"count\": 2, \"size\": "
+                          "0.01, \"region\": {\"min\": [0,0,0.2], \"max\": [0.1,0.1,0.3]}}"),
+                 "/interactions", "no interaction between 'rock' and 'rock'");
+#undef ONE_ROCK
+}
+
 TEST(errors_name_the_field)
 {
     expect_error("{\"time\": ", "/", "not valid JSON at line 1");
@@ -495,6 +524,7 @@ int main(void)
 {
     RUN(issue_example_parses_with_defaults);
     RUN(defaults);
+    RUN(own_pair_needed_only_for_two_particles);
     RUN(errors_name_the_field);
     RUN(validate_refuses_what_run_cannot_do);
     RUN(every_error_is_reported);
