@@ -130,6 +130,15 @@ int pd_quat_normalize(const double q[4], double out[4]);
 /* Rotation matrix of a quaternion (normalised first). Returns PD_EINVAL for a zero quaternion. */
 int pd_quat_to_matrix(const double q[4], double r[3][3]);
 
+/*
+ * Where a moving wall is at time t (s). A wall translates at velocity v (m/s) and turns at the
+ * constant angular velocity omega (rad/s) about its center, which moves with it: a point p0 of
+ * the wall at t = 0 is at center + v t + R(q) (p0 - center), q the rotation by omega t, which this
+ * returns (w, x, y, z). The engine places its walls with it, and the result file's per-frame wall
+ * vertices come from it.
+ */
+void pd_wall_rotation(const double omega[3], double t, double q[4]);
+
 /* ---- overlap of two polyhedra (kernels/overlap.h, thesis sections 4.2, 5.2, 5.3) ------------- */
 
 enum {

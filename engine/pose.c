@@ -26,6 +26,16 @@ int pd_quat_normalize(const double q[4], double out[4])
     return PD_OK;
 }
 
+void pd_wall_rotation(const double omega[3], double t, double q[4])
+{
+    double phi[3] = {omega[0] * t, omega[1] * t, omega[2] * t};
+    double a = sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]);
+    double s = a > 0 ? sin(0.5 * a) / a : 0.5;
+    q[0] = cos(0.5 * a);
+    for (int k = 0; k < 3; k++)
+        q[k + 1] = phi[k] * s;
+}
+
 int pd_quat_to_matrix(const double q[4], double r[3][3])
 {
     double u[4];

@@ -11,6 +11,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -42,7 +43,11 @@ typedef struct rh5_shape {
 
 typedef struct rh5_wall {
     char *name;
-    rh5_ext force; /* /stats/wall_force/<name> */
+    rh5_ext force;    /* /stats/wall_force/<name> */
+    double motion[9]; /* velocity, angular_velocity, center (rh5_add_wall) */
+    int moving, nv, nt;
+    double *verts; /* 3*nv at t=0, kept for frame_vertices when it moves */
+    rh5_ext frame; /* /walls/<name>/frame_vertices when it moves */
 } rh5_wall;
 
 enum { F_TIME, F_STEP, F_POS, F_QUAT, F_VEL, F_ANGVEL, F_MESH, NFRAME_DS };
@@ -67,6 +72,7 @@ struct rh5_writer {
     double *psize;
     int mesh_nv, mesh_nt; /* world-space mesh totals; 0 without RH5_SHAPE_MESHES */
     double *world;        /* 3*mesh_nv scratch */
+    double *wall_world;   /* 3 * (the most vertices of a moving wall) scratch */
     rh5_ext fr[NFRAME_DS], st[NSTATS_DS], stage[RH5_NSTAGES];
     long long nframes, nstats;
     double *times; /* frame times, for the XDMF file */
@@ -414,7 +420,7 @@ int rh5_add_shape(rh5_writer *w, const char *name, const char *kind, const doubl
 }
 
 int rh5_add_wall(rh5_writer *w, const char *name, const double *verts, int nv, const int *tris,
-                 int nt, pd_error *err)
+                 int nt, const double *motion, pd_error *err)
 {
     quiet();
     int rc = check_setup(w, "rh5_add_wall", err);
@@ -426,11 +432,35 @@ int rh5_add_wall(rh5_writer *w, const char *name, const double *verts, int nv, c
         return pd_error_set(err, PD_ENOMEM, "%s: out of memory", w->path);
     w->walls_cap = (int)cap;
     rh5_wall *wl = &w->walls[w->nwalls];
+    memset(wl, 0, sizeof *wl);
     if (!(wl->name = dupstr(name)))
         return pd_error_set(err, PD_ENOMEM, "%s: out of memory", w->path);
-    wl->force.id = -1;
+    wl->force.id = wl->frame.id = -1;
+    wl->nv = nv;
+    wl->nt = nt;
+    for (int k = 0; k < 9 && motion; k++) {
+        if (!isfinite(motion[k])) {
+            free(wl->name);
+            return pd_error_set(err, PD_EINVAL, "%s: wall '%s': motion value %d is not finite",
+                                w->path, name, k);
+        }
+        wl->motion[k] = motion[k];
+        wl->moving |= k < 6 && motion[k] != 0;
+    }
+    if (wl->moving && !(wl->verts = malloc(3 * (size_t)nv * sizeof *wl->verts))) {
+        free(wl->name);
+        return pd_error_set(err, PD_ENOMEM, "%s: out of memory", w->path);
+    }
+    if (wl->moving) memcpy(wl->verts, verts, 3 * (size_t)nv * sizeof *verts);
     w->nwalls++;
     rc = put_mesh(w, "walls", name, verts, nv, tris, nt, "m", NULL, err);
+    static const char *const part[3] = {"velocity", "angular_velocity", "center"};
+    static const char *const units[3] = {"m/s", "rad/s", "m"};
+    for (int k = 0; k < 3 && rc == PD_OK; k++) {
+        char p[NAME_MAX_LEN + 32];
+        snprintf(p, sizeof p, "/walls/%s/%s", name, part[k]);
+        rc = put_data(w, p, H5T_NATIVE_DOUBLE, 3, 0, wl->motion + 3 * k, units[k], NULL, err);
+    }
     if (rc != PD_OK) w->broken = 1;
     return rc;
 }
@@ -509,6 +539,17 @@ static int setup_series(rh5_writer *w, pd_error *err)
         snprintf(p, sizeof p, "/stats/wall_force/%s", w->walls[i].name);
         rc = make_ext(w, &w->walls[i].force, p, D, 3, 0, "N", err);
     }
+    int most = 0; /* vertices of the largest moving wall */
+    for (int i = 0; i < w->nwalls && !rc; i++) {
+        rh5_wall *wl = &w->walls[i];
+        if (!wl->moving) continue;
+        char p[NAME_MAX_LEN + 32];
+        snprintf(p, sizeof p, "/walls/%s/frame_vertices", wl->name);
+        rc = make_ext(w, &wl->frame, p, D, (hsize_t)wl->nv, 3, "m", err);
+        most = wl->nv > most ? wl->nv : most;
+    }
+    if (!rc && most > 0 && !(w->wall_world = malloc(3 * (size_t)most * sizeof *w->wall_world)))
+        rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory for the moving walls", w->path);
     if (!rc) rc = make_group(w, "/stats/stage_time", err);
     for (int k = 0; k < RH5_NSTAGES && !rc; k++) {
         char p[64];
@@ -625,6 +666,21 @@ static int world_meshes(rh5_writer *w, const double *pos, const double *quat, pd
     return PD_OK;
 }
 
+/* A moving wall's vertices at time t (pd_wall_rotation): center + v t + R (p0 - center). */
+static void wall_at(const rh5_wall *wl, double t, double *out)
+{
+    double q[4], r[3][3];
+    const double *v = wl->motion, *c = wl->motion + 6;
+    pd_wall_rotation(wl->motion + 3, t, q);
+    pd_quat_to_matrix(q, r); /* a unit quaternion: cannot fail */
+    for (int j = 0; j < wl->nv; j++) {
+        const double *p = wl->verts + 3 * j;
+        double d[3] = {p[0] - c[0], p[1] - c[1], p[2] - c[2]};
+        for (int k = 0; k < 3; k++)
+            out[3 * j + k] = c[k] + v[k] * t + r[k][0] * d[0] + r[k][1] * d[1] + r[k][2] * d[2];
+    }
+}
+
 int rh5_write_frame(rh5_writer *w, double time, long long step, const double *pos,
                     const double *quat, const double *vel, const double *angvel, pd_error *err)
 {
@@ -648,6 +704,15 @@ int rh5_write_frame(rh5_writer *w, double time, long long step, const double *po
         if (w->fr[k].id >= 0 && append_row(&w->fr[k], (hsize_t)w->nframes, data[k]) < 0) {
             w->broken = 1;
             return h5fail(w, err, "cannot append frame %lld to %s", w->nframes, w->fr[k].path);
+        }
+    }
+    for (int i = 0; i < w->nwalls; i++) {
+        rh5_wall *wl = &w->walls[i];
+        if (!wl->moving) continue;
+        wall_at(wl, time, w->wall_world);
+        if (append_row(&wl->frame, (hsize_t)w->nframes, w->wall_world) < 0) {
+            w->broken = 1;
+            return h5fail(w, err, "cannot append frame %lld to %s", w->nframes, wl->frame.path);
         }
     }
     if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) {
@@ -719,7 +784,7 @@ static int close_file(rh5_writer *w)
     for (int k = 0; k < NSTATS_DS; k++)
         if (close_ext(&w->st[k]) < 0) ok = 0;
     for (int i = 0; i < w->nwalls; i++)
-        if (close_ext(&w->walls[i].force) < 0) ok = 0;
+        if ((close_ext(&w->walls[i].force) < 0) | (close_ext(&w->walls[i].frame) < 0)) ok = 0;
     for (int k = 0; k < RH5_NSTAGES; k++)
         if (close_ext(&w->stage[k]) < 0) ok = 0;
     if (w->file >= 0 && H5Fclose(w->file) < 0) {
@@ -737,8 +802,11 @@ static void free_writer(rh5_writer *w)
         free(w->shapes[i].verts);
         free(w->shapes[i].tris);
     }
-    for (int i = 0; i < w->nwalls; i++)
+    for (int i = 0; i < w->nwalls; i++) {
         free(w->walls[i].name);
+        free(w->walls[i].verts);
+    }
+    free(w->wall_world);
     free(w->shapes);
     free(w->walls);
     free(w->pshape);
@@ -888,9 +956,15 @@ int rh5_finish(rh5_writer *w, const char *status, const char *message, pd_error 
     if (rc == PD_OK) {
         snprintf(xmf, len + sizeof ".xmf", "%s.xmf", w->path);
         snprintf(xtmp, len + sizeof ".xmf.partial", "%s.xmf.partial", w->path);
-        rh5_xdmf x = {w->base,    w->path,  w->n,       w->fields,
-                      w->nframes, w->times, w->mesh_nv, w->mesh_nt};
-        xrc = rh5_write_xdmf(xtmp, &x, &xerr);
+        rh5_xdmf_wall *xw = calloc((size_t)w->nwalls + 1, sizeof *xw);
+        for (int i = 0; xw && i < w->nwalls; i++)
+            xw[i] = (rh5_xdmf_wall){w->walls[i].name, w->walls[i].nv, w->walls[i].nt,
+                                    w->walls[i].moving};
+        rh5_xdmf x = {w->base,  w->path,    w->n,       w->fields, w->nframes,
+                      w->times, w->mesh_nv, w->mesh_nt, w->nwalls, xw};
+        xrc = xw ? rh5_write_xdmf(xtmp, &x, &xerr)
+                 : pd_error_set(&xerr, PD_ENOMEM, "%s: out of memory", w->path);
+        free(xw);
     }
     int kept = 0; /* the result is whole, only its final name could not be given */
     if (rc == PD_OK && rename(w->partial, w->path) != 0) {

@@ -27,7 +27,10 @@
  *                   wall time each took in the one step that ended at the row (the first row:
  *                   the initial force evaluation), timed with the device finishing after every
  *                   stage, so they sum to a little more than an unsynchronised step
- *   /walls/<name>/  vertices (nv,3) [m] at t=0, triangles (nt,3) int32
+ *   /walls/<name>/  vertices (nv,3) [m] at t=0, triangles (nt,3) int32, and its motion:
+ *                   velocity (3) [m/s], angular_velocity (3) [rad/s], center (3) [m] at t=0
+ *                   (pd_wall_rotation: zeros for a fixed wall); a wall that moves also has
+ *                   frame_vertices (F,nv,3) [m], its vertices at each frame's time
  *   /xdmf/          additions for the XDMF file: particle_id (N) int32 = 0..N-1 (the Polyvertex
  *                   connectivity); with RH5_SHAPE_MESHES also vertices (F,V,3) [m], every
  *                   particle's mesh in world coordinates per frame, triangles (T,3) int32 into
@@ -87,9 +90,13 @@ int rh5_create(const char *path, const char *scenario_json, int double_precision
 int rh5_add_shape(rh5_writer *w, const char *name, const char *kind, const double *verts, int nv,
                   const int *tris, int nt, double volume, pd_error *err);
 
-/* Adds /walls/<name> (vertices at t=0, m); its force is the stats column wall_force/<name>. */
+/*
+ * Adds /walls/<name> (vertices at t=0, m); its force is the stats column wall_force/<name>.
+ * motion: velocity (m/s), angular_velocity (rad/s) and center (m) at t = 0, 9 values, or NULL for
+ * a fixed wall. A wall that moves gets its vertices at every frame's time (frame_vertices).
+ */
 int rh5_add_wall(rh5_writer *w, const char *name, const double *verts, int nv, const int *tris,
-                 int nt, pd_error *err);
+                 int nt, const double *motion, pd_error *err);
 
 /*
  * Writes /particles (n >= 1 particles; shape[i] indexes the shapes in add order) and creates the
@@ -140,6 +147,13 @@ void rh5_abort(rh5_writer *w);
 
 /* ---- the XDMF file (engine/result_xdmf.c) ------------------------------------------------- */
 
+/* A wall as the XDMF file shows it: /walls/<name>/triangles on its vertices (frame_vertices
+ * frame k when it moves). */
+typedef struct rh5_xdmf_wall {
+    const char *name;
+    int nv, nt, moving;
+} rh5_xdmf_wall;
+
 /* What the XDMF file describes: the datasets of a closed result file. */
 typedef struct rh5_xdmf {
     const char *h5_name;  /* base name of the .h5 file, how every DataItem refers to it */
@@ -149,15 +163,18 @@ typedef struct rh5_xdmf {
     long long nframes;    /* frames written */
     const double *times;  /* nframes frame times, s */
     int mesh_nv, mesh_nt; /* /xdmf/vertices and /xdmf/triangles sizes; 0 when not stored */
+    int nwalls;
+    const rh5_xdmf_wall *walls;
 } rh5_xdmf;
 
 /*
  * Writes xpath: a temporal collection with one grid per frame. Each frame's particles are a
  * Polyvertex grid (explicit connectivity /xdmf/particle_id) with geometry frame k of
  * /frames/position and point attributes orientation, velocity and angular_velocity (where
- * written), particle_id, shape, material, size and mass; with shape meshes, each frame is a
- * spatial collection of that grid and a Triangle grid of /xdmf/vertices frame k with the cell
- * attribute particle_id. Frames are selected with Xdmf 3's "file:dataset|start:stride:count:
+ * written), particle_id, shape, material, size and mass. With shape meshes or walls, each frame
+ * is a spatial collection of that grid, a Triangle grid "shapes" of /xdmf/vertices frame k with
+ * the cell attribute particle_id, and a Triangle grid per wall, named after it, where it is at
+ * that frame. Frames are selected with Xdmf 3's "file:dataset|start:stride:count:
  * dataspace" syntax: read by ParaView's Xdmf3 readers, not by the legacy "XDMF Reader".
  */
 int rh5_write_xdmf(const char *xpath, const rh5_xdmf *x, pd_error *err);

@@ -113,31 +113,81 @@ static void xmeshes(const rh5_xdmf *x, FILE *f, const char *ind, const char *h5,
     fprintf(f, "%s</Attribute>\n%s</Grid>\n", in1, ind);
 }
 
-int rh5_write_xdmf(const char *xpath, const rh5_xdmf *x, pd_error *err)
+/* s with the XML specials escaped (for text and for attribute values in double quotes), in a
+ * new string; NULL when out of memory. */
+static char *xml_escape(const char *s)
 {
-    /* The base name goes into XML text: escape the XML specials. */
-    char *h5 = malloc(6 * strlen(x->h5_name) + 1), *o = h5;
-    if (!h5) return pd_error_set(err, PD_ENOMEM, "%s: out of memory", x->label);
-    for (const char *c = x->h5_name; *c; c++) {
-        const char *rep = *c == '&' ? "&amp;" : *c == '<' ? "&lt;" : *c == '>' ? "&gt;" : NULL;
+    char *out = malloc(6 * strlen(s) + 1), *o = out;
+    if (!out) return NULL;
+    for (const char *c = s; *c; c++) {
+        const char *rep = *c == '&'   ? "&amp;"
+                          : *c == '<' ? "&lt;"
+                          : *c == '>' ? "&gt;"
+                          : *c == '"' ? "&quot;"
+                                      : NULL;
         if (rep)
             o += sprintf(o, "%s", rep);
         else
             *o++ = *c;
     }
     *o = '\0';
-    FILE *f = fopen(xpath, "w");
+    return out;
+}
+
+/* Wall i at frame k: its triangles on its vertices, where it is at that frame when it moves.
+ * name: the wall's name, XML-escaped. */
+static void xwall(const rh5_xdmf *x, FILE *f, const char *ind, const char *h5, long long k, int i,
+                  const char *name)
+{
+    const rh5_xdmf_wall *wl = &x->walls[i];
+    char in1[32], in2[32], ds[1600];
+    snprintf(in1, sizeof in1, "%s  ", ind);
+    snprintf(in2, sizeof in2, "%s    ", ind);
+    fprintf(f, "%s<Grid Name=\"%s\" GridType=\"Uniform\">\n", ind, name);
+    fprintf(f, "%s<Topology TopologyType=\"Triangle\" NumberOfElements=\"%d\">\n", in1, wl->nt);
+    snprintf(ds, sizeof ds, "/walls/%s/triangles", name);
+    xitem(f, in2, h5, ds, wl->nt, 3, 1);
+    fprintf(f, "%s</Topology>\n%s<Geometry GeometryType=\"XYZ\">\n", in1, in1);
+    if (wl->moving) {
+        snprintf(ds, sizeof ds, "/walls/%s/frame_vertices", name);
+        xslab(f, in2, h5, ds, k, x->nframes, wl->nv, 3);
+    } else {
+        snprintf(ds, sizeof ds, "/walls/%s/vertices", name);
+        xitem(f, in2, h5, ds, wl->nv, 3, 0);
+    }
+    fprintf(f, "%s</Geometry>\n%s</Grid>\n", in1, ind);
+}
+
+static void free_names(char **names, int n)
+{
+    for (int i = 0; names && i < n; i++)
+        free(names[i]);
+    free(names);
+}
+
+int rh5_write_xdmf(const char *xpath, const rh5_xdmf *x, pd_error *err)
+{
+    /* The base name and the wall names go into XML: escape the XML specials. */
+    char *h5 = xml_escape(x->h5_name);
+    char **names = calloc((size_t)x->nwalls + 1, sizeof *names);
+    int ok = h5 && names;
+    for (int i = 0; ok && i < x->nwalls; i++)
+        ok = (names[i] = xml_escape(x->walls[i].name)) != NULL;
+    FILE *f = ok ? fopen(xpath, "w") : NULL;
     if (!f) {
+        int rc = ok ? pd_error_set(err, PD_EIO, "%s: cannot create '%s': %s", x->label, xpath,
+                                   strerror(errno))
+                    : pd_error_set(err, PD_ENOMEM, "%s: out of memory", x->label);
+        free_names(names, x->nwalls);
         free(h5);
-        return pd_error_set(err, PD_EIO, "%s: cannot create '%s': %s", x->label, xpath,
-                            strerror(errno));
+        return rc;
     }
     fprintf(f, "<?xml version=\"1.0\" ?>\n<!DOCTYPE Xdmf SYSTEM \"Xdmf.dtd\" []>\n"
                "<Xdmf Version=\"3.0\">\n  <Domain>\n"
                "    <Grid Name=\"polydem\" GridType=\"Collection\" CollectionType=\"Temporal\">\n");
     int meshes = x->mesh_nt > 0;
     for (long long k = 0; k < x->nframes; k++) {
-        if (!meshes) {
+        if (!meshes && x->nwalls == 0) {
             xpoints(x, f, "      ", h5, k, 1);
             continue;
         }
@@ -147,10 +197,13 @@ int rh5_write_xdmf(const char *xpath, const rh5_xdmf *x, pd_error *err)
             k);
         fprintf(f, "        <Time Value=\"%.17g\"/>\n", x->times[k]);
         xpoints(x, f, "        ", h5, k, 0);
-        xmeshes(x, f, "        ", h5, k);
+        if (meshes) xmeshes(x, f, "        ", h5, k);
+        for (int i = 0; i < x->nwalls; i++)
+            xwall(x, f, "        ", h5, k, i, names[i]);
         fprintf(f, "      </Grid>\n");
     }
     fprintf(f, "    </Grid>\n  </Domain>\n</Xdmf>\n");
+    free_names(names, x->nwalls);
     free(h5);
     int bad = ferror(f);
     if (fclose(f) != 0 || bad)

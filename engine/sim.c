@@ -106,7 +106,14 @@ static int open_result(sim *m, const pd_run_options *opt, rh5_writer **out, pd_e
     pd_mesh_destroy(ball);
     for (int i = 0; i < s->nwall && rc == PD_OK; i++) {
         const pd_mesh *me = s->wall[i].mesh;
-        rc = rh5_add_wall(w, s->wall[i].name, me->verts, me->nverts, me->tris, me->ntris, err);
+        const sc_wall *wl = &s->wall[i];
+        double motion[9];
+        for (int k = 0; k < 3; k++) {
+            motion[k] = wl->velocity[k];
+            motion[3 + k] = wl->angular_velocity[k];
+            motion[6 + k] = wl->center[k];
+        }
+        rc = rh5_add_wall(w, wl->name, me->verts, me->nverts, me->tris, me->ntris, motion, err);
     }
     if (rc == PD_OK)
         rc = rh5_set_particles(w, m->n, m->p->shape, m->p->material, m->p->size, m->p->mass, err);
@@ -212,7 +219,8 @@ const char *pd_run_status(int rc)
 
 /*
  * Refuses, before any work, an output path that names a directory (the finished run could not be
- * renamed to it), or whose result, XDMF file or their .partial files would be one of the files
+ * renamed to it), whose result, XDMF file or their .partial files exist as anything but a regular
+ * file (a device such as /dev/null, a pipe), or would be one of the files
  * the scenario was read from: writing them would destroy the input (compared by device and inode,
  * so symbolic links and other spellings of the same file are caught).
  */
@@ -232,6 +240,22 @@ static int check_output(const pd_scenario *s, const char *path, pd_error *err)
     for (int k = 0; k < 4 && rc == PD_OK; k++) {
         snprintf(name, len, "%s%s", path, suffix[k]);
         if (stat(name, &st) != 0) continue;
+        /* the finished files are renamed onto these names: that would replace a device (root
+         * running `-o /dev/null` replaced the system's /dev/null with a file), a pipe or a socket
+         */
+        if (!S_ISREG(st.st_mode)) {
+            rc = pd_error_set(err, PD_EINVAL,
+                              "output '%s': '%s' is a %s, not a regular file, and the result "
+                              "would replace it: give a file path (a temporary file, to discard "
+                              "the result)",
+                              path, name,
+                              S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode) ? "device"
+                              : S_ISFIFO(st.st_mode)                     ? "pipe"
+                              : S_ISSOCK(st.st_mode)                     ? "socket"
+                              : S_ISDIR(st.st_mode)                      ? "directory"
+                                                                         : "special file");
+            break;
+        }
         for (int i = 0; i < s->ninputs && rc == PD_OK; i++)
             if ((unsigned long long)st.st_dev == s->inputs[i].dev &&
                 (unsigned long long)st.st_ino == s->inputs[i].ino)

@@ -103,15 +103,6 @@ static int write_ints(sim *m, cl_mem b, size_t cnt, const int *in, pd_error *err
 }
 
 /* Quaternion of a rotation vector (rad). */
-static void quat_of(const double phi[3], double q[4])
-{
-    double a = sqrt(phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2]);
-    double s = a > 0 ? sin(0.5 * a) / a : 0.5;
-    q[0] = cos(0.5 * a);
-    for (int k = 0; k < 3; k++)
-        q[k + 1] = phi[k] * s;
-}
-
 static void rotate(const double q[4], const double v[3], double out[3])
 {
     double r[3][3];
@@ -122,7 +113,8 @@ static void rotate(const double q[4], const double v[3], double out[3])
 
 /*
  * A wall translates with its velocity and turns at its angular velocity about its center, which
- * moves with it: at time t its centroid is center + v t + R(omega t) (c0 - center).
+ * moves with it: at time t its centroid is center + v t + R(omega t) (c0 - center)
+ * (pd_wall_rotation).
  */
 int sim_walls_at(sim *m, double t, pd_error *err)
 {
@@ -138,12 +130,10 @@ int sim_walls_at(sim *m, double t, pd_error *err)
     }
     for (int i = 0; i < W; i++) {
         const sc_wall *wl = &m->s->wall[i];
-        double phi[3], rel[3], rr[3];
-        for (int k = 0; k < 3; k++) {
-            phi[k] = wl->angular_velocity[k] * t;
+        double rel[3], rr[3];
+        for (int k = 0; k < 3; k++)
             rel[k] = m->wall_c0[3 * i + k] - wl->center[k];
-        }
-        quat_of(phi, q + 4 * i);
+        pd_wall_rotation(wl->angular_velocity, t, q + 4 * i);
         rotate(q + 4 * i, rel, rr);
         for (int k = 0; k < 3; k++)
             x[3 * i + k] = wl->center[k] + wl->velocity[k] * t + rr[k];

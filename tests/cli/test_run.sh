@@ -180,6 +180,46 @@ else
     echo "skip disk_full tests: cannot mount a tmpfs (needs root)"
 fi
 
+# a moving wall is recorded where it is at each frame (/walls/<name>/frame_vertices) and shown
+# there in the XDMF file: a ball riding a platform that rises at 0.5 m/s sits on the platform's
+# recorded top at every frame: its centre one radius above it less the Hertz overlap under its
+# weight, delta = (m g / (4/3 E* sqrt(R)))^(2/3) = 2.75e-5 m (E* = E / (2 (1 - nu^2))), once the
+# damped contact has settled (frames 1 and 2; frame 0 is the touching start), to 5 % of delta;
+# a fixed wall has no frame_vertices
+cat >"$tmp/lift.json" <<'JSON'
+{"name": "lift", "time": {"dt": 1e-5, "duration": 0.1, "output_interval": 0.05},
+ "materials": {"m": {"density": 2500, "youngs_modulus": 1e7}},
+ "interactions": [{"between": ["m", "m"], "damping": 0.5}],
+ "shapes": {"ball": {"sphere": {}}},
+ "particles": [{"shape": "ball", "material": "m",
+                "list": [{"position": [0, 0, 0.01], "velocity": [0, 0, 0.5], "size": 0.02}]}],
+ "walls": [{"name": "platform", "material": "m", "box": {"min": [-0.1, -0.1, -0.02], "max": [0.1, 0.1, 0]},
+            "velocity": [0, 0, 0.5]},
+           {"name": "ground", "material": "m", "box": {"min": [-1, -1, -1], "max": [1, 1, -0.5]}}]}
+JSON
+$POLYDEM run "$tmp/lift.json" -o "$tmp/lift.h5" --quiet >"$tmp/out" 2>&1
+rc=$?
+h5get() { h5dump -m %.17g -w 0 -d "$1" "$tmp/lift.h5" | awk '/DATA \{/ {on = 1; next} on && /\}/ {exit} on {sub(/^ *\([^)]*\): */, ""); gsub(/,/, " "); printf "%s ", $0}'; }
+zs=$(h5get /frames/position)
+tops=$(h5get /walls/platform/frame_vertices)
+res=$(echo "$zs|$tops" | awk -F'|' '{
+    n = split($1, p, " "); m = split($2, v, " ");
+    if (n != 9 || m != 72) { print "bad sizes " n " " m; exit }
+    worst = 0
+    for (f = 0; f < 3; f++) {
+        top = -1e9; for (k = 0; k < 8; k++) { z = v[f * 24 + 3 * k + 3]; if (z > top) top = z }
+        want = 0.5 * 0.05 * f; if (top - want > 1e-12 || want - top > 1e-12) { print "top " top " at frame " f; exit }
+        m = 2500 * 3.141592653589793 / 6 * 0.02 ^ 3; es = 1e7 / (2 * (1 - 0.25 ^ 2))
+        delta = f ? (m * 9.81 / (4 / 3 * es * sqrt(0.01))) ^ (2 / 3) : 0
+        d = p[3 * f + 3] - (top + 0.01 - delta); if (d < 0) d = -d; if (d > worst) worst = d
+    }
+    print (worst < 0.05 * 2.75e-5 ? "ok" : "off by " worst) }')
+if [ "$rc" -eq 0 ] && [ "$res" = ok ] && ! h5ls "$tmp/lift.h5/walls/ground/frame_vertices" >/dev/null 2>&1 &&
+    grep -q 'lift.h5:/walls/platform/frame_vertices|2 0 0:1 1 1:1 8 3:3 8 3' "$tmp/lift.h5.xmf" &&
+    [ "$(grep -c '<Grid Name="ground"' "$tmp/lift.h5.xmf")" -eq 3 ]; then
+    ok moving_wall_frames
+else bad moving_wall_frames "exit $rc, $res: $(cat "$tmp/out")"; fi
+
 # -o must never destroy what the scenario was read from: the scenario itself (also through a
 # symbolic link, or as the .xmf written beside the result) and its mesh files; each is refused
 # before any work and left as it was
@@ -199,6 +239,15 @@ if cmp -s "$tmp/drop.json" "$tmp/in/self.json" && cmp -s "$tmp/drop.json" "$tmp/
 else bad inputs_left_intact "$(ls -l "$tmp/in")"; fi
 mkdir "$tmp/outdir"
 expect_fail output_is_directory 1 "is a directory" -- $POLYDEM run "$tmp/drop.json" -o "$tmp/outdir"
+# an output that exists as something other than a file would be replaced by the result: root
+# running `-o /dev/null` replaced the system's /dev/null with a file. Pipes stand in for devices
+# here (the same check; a regression must not cost the test machine its /dev/null).
+mkfifo "$tmp/pipe.h5" "$tmp/x.h5.xmf"
+expect_fail output_is_a_pipe 1 "'$tmp/pipe.h5' is a pipe, not a regular file" -- \
+    $POLYDEM run "$tmp/drop.json" -o "$tmp/pipe.h5"
+expect_fail output_xmf_is_a_pipe 1 "x.h5.xmf' is a pipe" -- $POLYDEM run "$tmp/drop.json" -o "$tmp/x.h5"
+if [ -p "$tmp/pipe.h5" ] && [ -p "$tmp/x.h5.xmf" ] && [ ! -e "$tmp/x.h5" ]; then ok pipes_left_alone
+else bad pipes_left_alone "$(ls -l "$tmp")"; fi
 
 # two runs writing the same result: the second is refused and leaves the first's file alone (it
 # used to truncate the first's .partial, then remove it on its own failure)

@@ -214,7 +214,12 @@ static void quat_v(int f, int i, double q[4])
     q[3] = sin(h);
 }
 
-/* Writes the standard run to path: 2 shapes, 1 wall, N particles, 3 frames, 4 stats rows.
+/* A moving wall, named with XML's specials: it rises at 1 m/s and turns at pi rad/s about z
+ * through the origin, a quarter turn by frame 2 (t = 0.5 s). */
+#define LID "lid <&\">"
+static const double LID_MOTION[9] = {0, 0, 1, 0, 0, 3.14159265358979323846, 0, 0, 0};
+
+/* Writes the standard run to path: 2 shapes, 2 walls, N particles, 3 frames, 4 stats rows.
  * Returns 0 when every call succeeded, or stops at the first failure (writer aborted). */
 static int write_run(const char *path, int fields, int close_it, pd_error *err)
 {
@@ -222,7 +227,8 @@ static int write_run(const char *path, int fields, int close_it, pd_error *err)
     if (rh5_create(path, SCENARIO, 1, 1e-5, fields, &w, err)) return -1;
     if (rh5_add_shape(w, "tet", "mesh", TET_V, 4, TET_T, 4, 8.0 / 3, err) ||
         rh5_add_shape(w, "cube", "mesh", CUBE_V, 8, CUBE_T, 12, 1.0, err) ||
-        rh5_add_wall(w, "floor", WALL_V, 4, WALL_T, 2, err) ||
+        rh5_add_wall(w, "floor", WALL_V, 4, WALL_T, 2, NULL, err) ||
+        rh5_add_wall(w, LID, WALL_V, 4, WALL_T, 2, LID_MOTION, err) ||
         rh5_set_particles(w, N, P_SHAPE, P_MAT, P_SIZE, P_MASS, err))
         goto fail;
     for (int f = 0; f < 3; f++) {
@@ -238,7 +244,7 @@ static int write_run(const char *path, int fields, int close_it, pd_error *err)
         if (rh5_write_frame(w, 0.25 * f, 100LL * f + 5000000000LL, pos, q, vel, av, err)) goto fail;
     }
     for (int s = 0; s < 4; s++) {
-        double wf[3] = {s, -s, 9.81 * s};
+        double wf[6] = {s, -s, 9.81 * s, 0, 0, -s};
         double st[RH5_NSTAGES] = {0.01 * s, 0.02 * s, 0.03 * s, 0.04 * s, 0.05 * s};
         if (rh5_write_stats(w, 0.1 * s, 40LL * s, 0.5 * s, 7LL * s, 11LL * s, 0.001 * s, 2.5 * s,
                             wf, st, err))
@@ -317,6 +323,30 @@ TEST(roundtrip_hdf5)
     CHECK_EQ_INT(2, read_ds(f, "/walls/floor/triangles", H5T_NATIVE_INT, ib, 64, dims));
     CHECK_EQ_INT(2, dims[0]);
     CHECK_EQ_INT(3, ib[5]);
+    /* the floor is fixed: zero motion, no frame_vertices */
+    CHECK_EQ_INT(1, read_ds(f, "/walls/floor/angular_velocity", H5T_NATIVE_DOUBLE, d, 64, dims));
+    CHECK(dims[0] == 3 && d[0] == 0 && d[1] == 0 && d[2] == 0);
+    CHECK(H5Lexists(f, "/walls/floor/frame_vertices", H5P_DEFAULT) == 0);
+    /* the lid: its motion, and its vertices at each frame's time t = 0.25 f, rotated by pi t
+     * about z and raised by t: (2, -2, 0) at t = 0.5 is (2, 2, 0.5) */
+    CHECK_EQ_INT(1, read_ds(f, "/walls/" LID "/angular_velocity", H5T_NATIVE_DOUBLE, d, 64, dims));
+    CHECK_NEAR(3.14159265358979323846, d[2], 0);
+    CHECK_EQ_INT(1, read_ds(f, "/walls/" LID "/velocity", H5T_NATIVE_DOUBLE, d, 64, dims));
+    CHECK_NEAR(1, d[2], 0);
+    CHECK_EQ_INT(3, read_ds(f, "/walls/" LID "/frame_vertices", H5T_NATIVE_DOUBLE, d, 64, dims));
+    CHECK(dims[0] == 3 && dims[1] == 4 && dims[2] == 3);
+    for (int fr = 0; fr < 3; fr++) {
+        double t = 0.25 * fr, c = cos(3.14159265358979323846 * t),
+               sn = sin(3.14159265358979323846 * t);
+        for (int v = 0; v < 4; v++) {
+            const double *p = WALL_V + 3 * v, *o = d + 12 * fr + 3 * v;
+            CHECK_NEAR(c * p[0] - sn * p[1], o[0], 1e-15);
+            CHECK_NEAR(sn * p[0] + c * p[1], o[1], 1e-15);
+            CHECK_NEAR(t, o[2], 1e-15);
+        }
+    }
+    CHECK_NEAR(2, d[24 + 3], 1e-15);
+    CHECK_NEAR(2, d[24 + 4], 1e-15);
 
     /* particles */
     CHECK_EQ_INT(1, read_ds(f, "/particles/shape", H5T_NATIVE_INT, ib, 64, dims));
@@ -434,7 +464,9 @@ TEST(roundtrip_hdf5)
     /* units: on every dataset, and the right ones where they matter */
     units_count u = {0};
     CHECK(H5Lvisit(f, H5_INDEX_NAME, H5_ITER_INC, check_units_cb, &u) >= 0);
-    CHECK_EQ_INT(33, u.datasets); /* 4 shapes, 2 walls, 4 particles, 4 xdmf, 6 frames, 13 stats */
+    /* 4 shapes; the walls' 2 meshes and 3 motions each, and the lid's frame_vertices; 4 particles,
+     * 4 xdmf, 6 frames, 14 stats */
+    CHECK_EQ_INT(43, u.datasets);
     CHECK_EQ_INT(0, u.missing);
     if (u.missing) printf("  first dataset without units: %s\n", u.first_missing);
     static const char *const units[][2] = {{"/frames/position", "m"},
@@ -450,6 +482,10 @@ TEST(roundtrip_hdf5)
                                            {"/stats/stage_time/contacts", "s"},
                                            {"/shapes/cube/triangles", ""},
                                            {"/walls/floor/vertices", "m"},
+                                           {"/walls/floor/velocity", "m/s"},
+                                           {"/walls/floor/angular_velocity", "rad/s"},
+                                           {"/walls/floor/center", "m"},
+                                           {"/walls/" LID "/frame_vertices", "m"},
                                            {"/stats/max_overlap_ratio", "1"},
                                            {"/stats/wall_time", "s"}};
     for (size_t a = 0; a < sizeof units / sizeof units[0]; a++) {
@@ -503,6 +539,16 @@ TEST(xdmf_file)
     CHECK_STR_CONTAINS(x, ">out.h5:/xdmf/vertices|2 0 0:1 1 1:1 16 3:3 16 3</DataItem>");
     CHECK_STR_CONTAINS(x, ">out.h5:/xdmf/triangles</DataItem>");
     CHECK_EQ_INT(3, count_of(x, "CollectionType=\"Spatial\""));
+    /* the walls in every frame, named, the XML specials escaped: the floor where it stands, the
+     * lid where it is at that frame */
+    CHECK_EQ_INT(3, count_of(x, "<Grid Name=\"floor\" GridType=\"Uniform\">"));
+    CHECK_EQ_INT(3, count_of(x, "<Grid Name=\"lid &lt;&amp;&quot;&gt;\" GridType=\"Uniform\">"));
+    CHECK_EQ_INT(6, count_of(x, "TopologyType=\"Triangle\" NumberOfElements=\"2\""));
+    CHECK_EQ_INT(3, count_of(x, ">out.h5:/walls/floor/vertices</DataItem>"));
+    CHECK_EQ_INT(3, count_of(x, ">out.h5:/walls/lid &lt;&amp;&quot;&gt;/triangles</DataItem>"));
+    CHECK_STR_CONTAINS(x, "<DataItem Dimensions=\"4 3\" NumberType=\"Float\" Precision=\"8\" "
+                          "Format=\"HDF\">out.h5:/walls/lid &lt;&amp;&quot;&gt;/frame_vertices|1 0 "
+                          "0:1 1 1:1 4 3:3 4 3</DataItem>");
     if (system("command -v xmllint >/dev/null 2>&1") == 0) {
         char cmd[300];
         snprintf(cmd, sizeof cmd, "xmllint --noout '%s.xmf' >/dev/null 2>&1", path);
@@ -528,7 +574,9 @@ TEST(without_optional_fields)
         H5Fclose(f);
     }
     char *x = read_text(tmp_path("plain.h5.xmf"));
-    CHECK(x && !strstr(x, "velocity") && !strstr(x, "Triangle") && !strstr(x, "Spatial"));
+    /* no velocities, no particle meshes; the walls, so every frame is a spatial collection */
+    CHECK(x && !strstr(x, "velocity") && !strstr(x, "Name=\"shapes\"") &&
+          count_of(x, "Triangle") == 6 && count_of(x, "Spatial") == 3);
     CHECK(x && count_of(x, "<Time ") == 3 && count_of(x, "Polyvertex") == 3);
     free(x);
     remove_result(path);
@@ -613,7 +661,7 @@ TEST(error_bad_input_keeps_writer_usable)
     shape[1] = 0;
     CHECK_EQ_INT(0, rh5_set_particles(w, 2, shape, mat, size, mass, &err));
     CHECK_EQ_INT(PD_EINVAL, rh5_set_particles(w, 2, shape, mat, size, mass, &err));
-    CHECK_EQ_INT(PD_EINVAL, rh5_add_wall(w, "late", WALL_V, 4, WALL_T, 2, &err));
+    CHECK_EQ_INT(PD_EINVAL, rh5_add_wall(w, "late", WALL_V, 4, WALL_T, 2, NULL, &err));
     CHECK_STR_CONTAINS(err.msg, "rh5_add_wall after rh5_set_particles");
     double pos[6] = {0}, q[8] = {1, 0, 0, 0, 1, 0, 0, 0};
     CHECK_EQ_INT(PD_EINVAL, rh5_write_frame(w, 0, 0, pos, q, NULL, NULL, &err));
