@@ -241,6 +241,26 @@ static json_t *frame_rows(hid_t f, const char *path, hsize_t k, int cols)
     return out;
 }
 
+/* {"<wall>": its vertices at frame k} for every wall that moves (frame_vertices); fixed walls
+ * are in result_shapes. NULL on failure. */
+static json_t *moving_walls(hid_t f, hsize_t k)
+{
+    char **names = member_names(f, "/walls");
+    json_t *o = names ? json_object() : NULL;
+    for (char **n = names; o && *n; n++) {
+        char p[300];
+        snprintf(p, sizeof p, "/walls/%s/frame_vertices", *n);
+        if (H5Lexists(f, p, H5P_DEFAULT) <= 0) continue;
+        json_t *v = frame_rows(f, p, k, 3);
+        if (!v || json_object_set_new(o, *n, v) != 0) {
+            json_decref(o);
+            o = NULL;
+        }
+    }
+    free_names(names);
+    return o;
+}
+
 json_t *result_frame(const char *path, long long k, int *range, char *msg, size_t ml)
 {
     *range = 0;
@@ -259,14 +279,17 @@ json_t *result_frame(const char *path, long long k, int *range, char *msg, size_
     } else if (nf >= 0) {
         json_t *pos = frame_rows(f, "/frames/position", (hsize_t)k, 3);
         json_t *quat = frame_rows(f, "/frames/orientation", (hsize_t)k, 4);
-        if (pos && quat)
-            o = json_pack("{s:I, s:I, s:f, s:I, s:o, s:o, s:{s:s, s:s, s:s}}", "frame",
+        json_t *walls = moving_walls(f, (hsize_t)k);
+        if (pos && quat && walls)
+            o = json_pack("{s:I, s:I, s:f, s:I, s:o, s:o, s:o, s:{s:s, s:s, s:s, s:s}}", "frame",
                           (json_int_t)k, "count", (json_int_t)nf, "time", t[k], "step",
-                          (json_int_t)s[k], "position", pos, "orientation", quat, "units", "time",
-                          "s", "position", "m", "orientation", "1 (w, x, y, z)");
+                          (json_int_t)s[k], "position", pos, "orientation", quat, "walls", walls,
+                          "units", "time", "s", "position", "m", "orientation", "1 (w, x, y, z)",
+                          "walls", "m (vertices of each moving wall at this frame)");
         else {
             json_decref(pos);
             json_decref(quat);
+            json_decref(walls);
         }
     }
     if (!o && !*range) snprintf(msg, ml, "cannot read /frames from the result file");

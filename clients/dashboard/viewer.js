@@ -5,7 +5,7 @@
 //
 //   const v = new Viewer(container);
 //   v.setScene({shapes: [{name, kind, vertices, triangles}], particles: {shape, size}, walls});
-//   v.setFrame({time, position, orientation});
+//   v.setFrame({time, position, orientation, walls});
 
 import { flat } from './api.js';
 
@@ -60,6 +60,7 @@ export class Viewer {
       mesh.material.dispose();
     }
     this.walls.clear ? this.walls.clear() : this.walls.children.slice().forEach((c) => this.walls.remove(c));
+    this.wallParts = new Map(); // name -> {triangles, mesh, edges}, to move a moving wall
     const shapeOf = info.particles.shape;
     this.size = Float64Array.from(info.particles.size);
     this.meshes = info.shapes.map((s, k) => {
@@ -79,15 +80,27 @@ export class Viewer {
         color: 0x8c959f, transparent: true, opacity: 0.12, depthWrite: false, side: THREE.DoubleSide,
       }));
       m.name = w.name;
+      const edges = new THREE.LineSegments(new THREE.EdgesGeometry(g, 20),
+        new THREE.LineBasicMaterial({ color: 0x6e7781, transparent: true, opacity: 0.6 }));
       this.walls.add(m);
-      this.walls.add(new THREE.LineSegments(new THREE.EdgesGeometry(g, 20),
-        new THREE.LineBasicMaterial({ color: 0x6e7781, transparent: true, opacity: 0.6 })));
+      this.walls.add(edges);
+      this.wallParts.set(w.name, { triangles: w.triangles, mesh: m, edges });
     }
     this.fitted = false;
   }
 
-  // One frame: position (N x 3, m) and orientation (N x 4, w x y z), nested or flat.
+  // One frame: position (N x 3, m) and orientation (N x 4, w x y z), nested or flat; walls
+  // {name: vertices [m]} for the walls that move, drawn where they are at this frame.
   setFrame(frame) {
+    for (const [name, vertices] of Object.entries(frame.walls || {})) {
+      const w = this.wallParts && this.wallParts.get(name);
+      if (!w) continue;
+      const g = geometry(vertices, w.triangles);
+      w.mesh.geometry.dispose();
+      w.mesh.geometry = g;
+      w.edges.geometry.dispose();
+      w.edges.geometry = new THREE.EdgesGeometry(g, 20);
+    }
     const p = flat(frame.position), q = flat(frame.orientation);
     const m = new THREE.Matrix4(), pos = new THREE.Vector3(), rot = new THREE.Quaternion();
     const scl = new THREE.Vector3();

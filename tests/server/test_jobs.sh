@@ -120,6 +120,27 @@ check frame_out_of_range_404 "404 frame_not_found" "$code $(jstr code)"
 code=$(req GET "/v1/jobs/$id/shapes")
 check shapes "200 r,ball [0, 1]" "$code $(jget "$tmp/body" '",".join(s["name"] for s in d["shapes"])') $(jget "$tmp/body" 'd["particles"]["shape"]')"
 
+check frame_no_moving_walls "{}" "$(req GET "/v1/jobs/$id/frames/0" >/dev/null; jget "$tmp/body" 'd["walls"]')"
+
+# a moving wall: each frame lists its vertices where it is then (fixed walls stay in /shapes)
+cat >"$tmp/lift.json" <<'JSON'
+{"name": "lift", "time": {"dt": 1e-5, "duration": 0.002, "output_interval": 0.001},
+ "materials": {"m": {"density": 2500, "youngs_modulus": 1e7}},
+ "interactions": [{"between": ["m", "m"]}],
+ "shapes": {"ball": {"sphere": {}}},
+ "particles": [{"shape": "ball", "material": "m", "list": [{"position": [0, 0, 0.5], "size": 0.02}]}],
+ "walls": [{"name": "lift", "material": "m", "box": {"min": [-0.1, -0.1, -0.02], "max": [0.1, 0.1, 0]},
+            "velocity": [0, 0, 2]},
+           {"name": "ground", "material": "m", "box": {"min": [-1, -1, -1], "max": [1, 1, -0.5]}}]}
+JSON
+lid=$(submit "$tmp/lift.json")
+check moving_wall_job succeeded "$(wait_status "$lid" succeeded 60)"
+code=$(req GET "/v1/jobs/$lid/frames/-1")
+check frame_moving_wall "200 lift 8 0.004 -0.016 m" "$code $(jget "$tmp/body" '" ".join(d["walls"]) + " %d %.3f %.3f " % (len(d["walls"]["lift"]), max(v[2] for v in d["walls"]["lift"]), min(v[2] for v in d["walls"]["lift"])) + d["units"]["walls"].split()[0]')"
+code=$(req GET "/v1/jobs/$lid/shapes")
+check shapes_list_every_wall "200 lift,ground" "$code $(jget "$tmp/body" '",".join(w["name"] for w in d["walls"])')"
+req DELETE "/v1/jobs/$lid" >/dev/null # the counts below are of the first job's
+
 code=$(req GET '/v1/device?selftest=1')
 check selftest_on_request "200 passed" "$code $(jget "$tmp/body" 'd["selftest"]["status"]')"
 
