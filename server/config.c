@@ -182,8 +182,9 @@ static const char usage[] =
     "  --config FILE       settings file, 'key = value' lines (command-line flags win)\n"
     "  --tokens FILE       'TOKEN NAME' lines: every /v1 route then needs a bearer token\n"
     "  --insecure          allow a non-loopback address without tokens\n"
-    "  --dashboard DIR     the web dashboard's files (default: clients/dashboard beside the "
-    "build)\n"
+    "  --dashboard DIR     the web dashboard's files (default: <prefix>/share/polydem/dashboard\n"
+    "                      for an installed <prefix>/bin/polydemd, else clients/dashboard\n"
+    "                      beside the build)\n"
     "  --no-selftest       use the device without the start-up self-test (development)\n";
 
 /* Flags taking a value, and the config key each sets. */

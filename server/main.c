@@ -90,7 +90,9 @@ static int is_dir(const char *p)
 
 /*
  * A directory of the repository (the dashboard, the examples): the configured one, else the
- * first of rel[] that exists beside the executable (build/polydemd or build/san/polydemd).
+ * first of rel[] that exists beside the executable: <prefix>/share/polydem/... for an installed
+ * <prefix>/bin/polydemd, then the source tree's for build/polydemd or build/san/polydemd. The
+ * installed one comes first: from ~/.local/bin, "../../examples" is ~/examples.
  */
 static void find_dir(const char *configured, const char *what, const char *const *rel, int nrel,
                      char *out, size_t cap)
@@ -183,9 +185,9 @@ int main(int argc, char **argv)
                 "while running each of them %d times\n",
                 failed, JS_MAX_CRASHES);
     sweep(a.st, a.results_dir, a.meshes_dir);
-    static const char *const dash[] = {"../clients/dashboard", "../../clients/dashboard",
-                                       "../share/polydem/dashboard"};
-    static const char *const ex[] = {"../examples", "../../examples", "../share/polydem/examples"};
+    static const char *const dash[] = {"../share/polydem/dashboard", "../clients/dashboard",
+                                       "../../clients/dashboard"};
+    static const char *const ex[] = {"../share/polydem/examples", "../examples", "../../examples"};
     find_dir(cfg.dashboard, "dashboard", dash, 3, a.dashboard, sizeof a.dashboard);
     find_dir(cfg.examples, "examples", ex, 3, a.examples, sizeof a.examples);
     if (sse_hub_create(cfg.keepalive, &a.hub) != 0) {
