@@ -298,7 +298,22 @@ timed_out=0
 finish() { # [EXIT_STATUS]
     # a signal's trap may run this inside `IFS=<separator> read`, whose IFS would still hold
     local IFS=$' \t\n'
-    local csv="$tmp/out.csv" i st bad=0 left=() auth=""
+    local csv="$tmp/out.csv" i st bad=0 left=() auth="" jid jname jst
+    # Interrupted while submitting: the server may have made the job whose answer the sweep never
+    # read (the signal struck between the two). Its grid point would read "unsubmitted" and the
+    # job would run on, missing from the cancel command; find it by its tag and name instead.
+    local unsubmitted=0
+    for ((i = 0; i < njobs; i++)); do [ -n "${states[i]:-}" ] || unsubmitted=1; done
+    if [ "$unsubmitted" = 1 ] && [ "$(http GET "/v1/jobs?tag=$sweep_id&limit=1000")" = 200 ]; then
+        while IFS=$'\x1f' read -r jid jname jst; do
+            for ((i = 0; i < njobs; i++)); do
+                if [ -z "${states[i]:-}" ] && [ "$jname" = "${base_name:0:52}-$i" ]; then
+                    ids[i]=$jid
+                    states[i]=$jst
+                fi
+            done
+        done < <(jq -r '.jobs[]? | [.id, .name, .status] | map(tostring) | join("\u001f")' "$tmp/body" 2>/dev/null)
+    fi
     jq -r '(["job_id"] + map(.pointer) + ["status", "final_kinetic_energy_J", "peak_contacts", "peak_wall_force_N"])
         | map(tostring | if test("[,\"\n]") then "\"" + gsub("\""; "\"\"") + "\"" else . end) | join(",")' \
         "$tmp/sets.json" >"$csv"

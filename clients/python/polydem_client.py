@@ -483,6 +483,18 @@ class Client:
                 timed_out = True
         except KeyboardInterrupt as e:
             interrupted = e
+        if interrupted and any(entry[2] == "unsubmitted" for entry in entries):
+            # Interrupted while a submission's answer was on its way: the server may hold the job
+            # whose id this sweep never read. Found by its tag and name, it is listed (and can be
+            # cancelled) instead of running on as an "unsubmitted" point.
+            try:
+                for job in self.jobs(tag=sweep_id, limit=1000):
+                    for i, entry in enumerate(entries):
+                        if entry[2] == "unsubmitted" and job.get("name") == "%s-%d" % (base, i):
+                            entry[0], entry[2] = job["id"], job.get("status", "queued")
+                            latest[job["id"]] = job
+            except (PolydemError, KeyboardInterrupt):
+                pass
         rows = []
         for entry in entries:
             job_id, texts, status = entry
