@@ -56,7 +56,11 @@ typedef struct sim {
     /* the fastest any point of a moving wall moves, m/s: |v| + |omega| times its farthest vertex
      * from the rotation centre (walls move at constant velocities) */
     double wall_speed;
-    double wall_time;         /* the time the walls were last placed at (sim_walls_at) */
+    double wall_time; /* the time the walls were last placed at (sim_walls_at) */
+    /* sim_walls_at's host copy of what it writes to the device, and the event of its last write:
+     * the writes do not block (a blocking write each step stalled the queue five times) */
+    void *wall_stage;
+    cl_event wall_ev;
     double margin;            /* added to every box: half the largest cohesion range, m */
     double lo[3], inv_ext[3]; /* Morton scene box */
 

@@ -71,22 +71,6 @@ int sim_read_info(sim *m, size_t cnt, double *out, pd_error *err)
     return read_as_doubles(m, m->info, 0, 0, cnt, out, err);
 }
 
-/* Writes n boxes (lo xyz, hi xyz) to the device's float boxes, rounded outwards (bvh.h). */
-static int write_boxes(sim *m, cl_mem b, int n, const double *box, pd_error *err)
-{
-    float *h = malloc(sizeof(float) * 6 * (size_t)n);
-    if (!h) return pd_error_set(err, PD_ENOMEM, "run: out of memory");
-    for (int i = 0; i < n; i++)
-        for (int k = 0; k < 3; k++) {
-            h[6 * i + k] = bvh_down(box[6 * i + k]);
-            h[6 * i + 3 + k] = bvh_up(box[6 * i + 3 + k]);
-        }
-    cl_int e = clEnqueueWriteBuffer(m->dev->queue, b, CL_TRUE, 0, sizeof(float) * 6 * (size_t)n, h,
-                                    0, NULL, NULL);
-    free(h);
-    return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueWriteBuffer(wall boxes)", e);
-}
-
 /* All zero bytes: a zero of either precision. */
 cl_int sim_zero_reals(sim *m, cl_mem b, size_t cnt)
 {
@@ -109,6 +93,60 @@ static void rotate(const double q[4], const double v[3], double out[3])
     pd_quat_to_matrix(q, r);
     for (int i = 0; i < 3; i++)
         out[i] = r[i][0] * v[0] + r[i][1] * v[1] + r[i][2] * v[2];
+}
+
+/*
+ * Writes the walls' bodies (x, q, v, w at body n + i) and boxes without blocking: converted into
+ * m->wall_stage, which the writes read until they complete, so the last step's writes are waited
+ * for first (long done by then: each step reads the device's status back).
+ */
+static int stage_walls(sim *m, int W, const double *x, const double *q, const double *v,
+                       const double *w, const double *box, pd_error *err)
+{
+    size_t rs = m->rs, nr = 13 * (size_t)W; /* reals: x 3, q 4, v 3, w 3 per wall */
+    if (m->wall_ev) {
+        cl_int e = clWaitForEvents(1, &m->wall_ev);
+        clReleaseEvent(m->wall_ev);
+        m->wall_ev = NULL;
+        if (e != CL_SUCCESS) return CL_FAIL(err, "clWaitForEvents(wall writes)", e);
+    }
+    if (!m->wall_stage && !(m->wall_stage = malloc(rs * nr + sizeof(float) * 6 * (size_t)W)))
+        return pd_error_set(err, PD_ENOMEM, "run: out of memory");
+    const double *part[4] = {x, q, v, w};
+    const size_t len[4] = {3, 4, 3, 3};
+    size_t off[4], at = 0;
+    for (int a = 0; a < 4; a++) {
+        off[a] = at;
+        for (size_t i = 0; i < len[a] * (size_t)W; i++, at++) {
+            if (m->dbl)
+                ((double *)m->wall_stage)[at] = part[a][i];
+            else
+                ((float *)m->wall_stage)[at] = (float)part[a][i];
+        }
+    }
+    float *fb = (float *)((char *)m->wall_stage + rs * nr);
+    for (int i = 0; i < W; i++)
+        for (int k = 0; k < 3; k++) {
+            fb[6 * i + k] = bvh_down(box[6 * i + k]);
+            fb[6 * i + 3 + k] = bvh_up(box[6 * i + 3 + k]);
+        }
+    size_t b0 = (size_t)m->n;
+    cl_mem dst[4] = {m->x, m->q, m->v, m->w};
+    /* the walls' angular velocities are the only bodies of w */
+    size_t first[4] = {3 * b0, 4 * b0, 3 * b0, 0};
+    cl_int e = CL_SUCCESS;
+    for (int a = 0; a < 4 && e == CL_SUCCESS; a++)
+        e = clEnqueueWriteBuffer(m->dev->queue, dst[a], CL_FALSE, rs * first[a],
+                                 rs * len[a] * (size_t)W, (char *)m->wall_stage + rs * off[a], 0,
+                                 NULL, NULL);
+    if (e == CL_SUCCESS)
+        e = clEnqueueWriteBuffer(m->dev->queue, m->wbox, CL_FALSE, 0, sizeof(float) * 6 * (size_t)W,
+                                 fb, 0, NULL, &m->wall_ev);
+    if (e != CL_SUCCESS) {
+        clFinish(m->dev->queue); /* the writes enqueued may still read the stage */
+        return CL_FAIL(err, "clEnqueueWriteBuffer(walls)", e);
+    }
+    return PD_OK;
 }
 
 /*
@@ -156,13 +194,8 @@ int sim_walls_at(sim *m, double t, pd_error *err)
             }
         }
     }
-    size_t b0 = (size_t)m->n;
-    m->wall_time = t;
-    rc = sim_write(m, m->x, 3 * b0, 3 * (size_t)W, x, err);
-    if (rc == PD_OK) rc = sim_write(m, m->q, 4 * b0, 4 * (size_t)W, q, err);
-    if (rc == PD_OK) rc = sim_write(m, m->v, 3 * b0, 3 * (size_t)W, v, err);
-    if (rc == PD_OK) rc = sim_write(m, m->w, 0, 3 * (size_t)W, w, err); /* walls' only */
-    if (rc == PD_OK) rc = write_boxes(m, m->wbox, W, box, err);
+    rc = stage_walls(m, W, x, q, v, w, box, err);
+    if (rc == PD_OK) m->wall_time = t;
 done:
     free(x);
     free(q);
@@ -810,6 +843,11 @@ void sim_destroy(sim *m)
         if (*kernel_slot(m, i)) clReleaseKernel(*kernel_slot(m, i));
     if (m->sort.dev) dsort_free(&m->sort);
     sc_particles_destroy(m->p);
+    if (m->wall_ev) {
+        clWaitForEvents(1, &m->wall_ev); /* the write reads wall_stage until it completes */
+        clReleaseEvent(m->wall_ev);
+    }
+    free(m->wall_stage);
     free(m->wall_c0);
     free(m->wall_local);
     free(m->wall_voff);
