@@ -13,6 +13,7 @@ const EXAMPLES = [
   ['cube_settling', 'A cube and Schönhardt prisms settling on a floor'],
   ['packing', 'Gravity packing of Schönhardt particles in a box'],
   ['hopper', 'Hopper discharge onto a plate'],
+  ['tumbler', 'Rocks tumbling in a turning square drum (moving walls)'],
 ];
 
 const editor = document.getElementById('scenario');
