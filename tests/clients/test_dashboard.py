@@ -186,6 +186,8 @@ def main():
             page.eval("(() => { const s = document.getElementById('frame'); s.value = s.max;"
                       " s.dispatchEvent(new Event('input')); })()")
             page.wait_for("document.getElementById('frame-label').textContent.startsWith('frame %s ')" % last, 10)
+            page.eval("new Promise(r => requestAnimationFrame(() => requestAnimationFrame(r)))")
+            shot(page, "#viewer canvas", "viewer-last")  # the moving wall turned (SHOTS: by eye)
         step("time_slider_shows_last_frame", slider)
 
         def downloads():

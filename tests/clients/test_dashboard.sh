@@ -23,6 +23,11 @@ else
     POLYDEMD_ARGS="--tokens $tmp/tokens"
     start_daemon || { summary; exit 1; }
     quick_scenario "$tmp/quick.json"
+    # with a turning wall below the pair: the viewer redraws it at every frame it shows (a
+    # script error there fails no_script_errors)
+    jq '.walls = [{"name": "turntable", "material": "rock", "angular_velocity": [0, 0, 300],
+                   "box": {"min": [-0.05, -0.02, -0.04], "max": [0.05, 0.02, -0.03]}}]' \
+        "$tmp/quick.json" >"$tmp/quick_wall.json" && mv "$tmp/quick_wall.json" "$tmp/quick.json"
     timeout 90 python3 -B tests/clients/test_dashboard.py "$URL" "$tmp/quick.json" "$token" \
         >"$tmp/browser.out" 2>&1
     rc=$?
