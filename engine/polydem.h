@@ -288,7 +288,9 @@ typedef struct pd_progress {
     long long frames;      /* output frames written so far */
     /* At the end of a run that stopped early (cancelled, diverged, a device error): 1 when its
      * frames so far were kept in the output file, whose root attribute status then says why
-     * ("cancelled", "diverged" or "failed"); 0 when there was nothing to keep. */
+     * ("cancelled", "diverged" or "failed"); 0 when there was nothing to keep, or when writing
+     * the result failed (a full disk): what was written is then at best in "<output>.partial",
+     * and the error says so. */
     int result_kept;
 } pd_progress;
 
@@ -318,7 +320,11 @@ typedef struct pd_run_options {
  * stable estimate without allow_unstable_dt), PD_EIO, PD_ENOMEM or PD_ECL. final (may be NULL)
  * receives the last progress record whatever the outcome. A run that stops after its first frame
  * keeps the frames so far in output_path, marked by the root attribute status (final's
- * result_kept); before that, no file is left. A device runs one scenario at a time.
+ * result_kept); before that, no file is left. A run whose result write fails (PD_EIO: a full
+ * disk) keeps its whole frames and stats rows so far in "<output_path>.partial" when they read
+ * back whole, and its error ends "; the N frames up to t = T s are kept in '<output_path>.partial'
+ * (incomplete, so not renamed)", else "; result discarded: <why>". A device runs one scenario at a
+ * time.
  */
 int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_progress *final,
            pd_error *err);

@@ -5,9 +5,10 @@
  * the innermost message of HDF5's error stack appended (HDF5's own printing is switched off).
  * Frames and stats rows are appended to chunked datasets whose first axis is unlimited, and the
  * file is flushed after each, so a crashed run leaves a readable "<path>.partial" up to its last
- * row. The XDMF file is written at close, when the number of frames is known.
+ * row; a run whose write fails leaves one too, cut back to its last whole frame and stats row
+ * (finish_broken). The XDMF file is written at close, when the number of frames is known.
  */
-#define _DEFAULT_SOURCE /* flock(2) */
+#define _GNU_SOURCE /* flock(2), memfd_create(2) */
 #include <errno.h>
 #include <fcntl.h>
 #include <limits.h>
@@ -17,6 +18,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/file.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <hdf5.h>
@@ -77,7 +80,8 @@ struct rh5_writer {
     long long nframes, nstats;
     double *times; /* frame times, for the XDMF file */
     size_t times_cap;
-    int broken; /* a write failed: the file no longer follows the contract */
+    int broken;   /* a write failed: the file no longer follows the contract */
+    pd_error why; /* the failure that broke it (rh5_finish restates it) */
 };
 
 /* ---- errors -------------------------------------------------------------------------------- */
@@ -103,6 +107,15 @@ static herr_t first_desc(unsigned n, const H5E_error2_t *e, void *data)
     return 0;
 }
 
+static int vh5fail(const rh5_writer *w, pd_error *err, const char *fmt, va_list ap)
+{
+    char what[320], why[200] = "";
+    vsnprintf(what, sizeof what, fmt, ap);
+    H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, first_desc, why);
+    if (why[0]) return pd_error_set(err, PD_EIO, "%s: %s (hdf5: %s)", w->path, what, why);
+    return pd_error_set(err, PD_EIO, "%s: %s", w->path, what);
+}
+
 /* Reports a failed HDF5 call: "<path>: <what> (hdf5: <innermost error>)". */
 #if defined(__GNUC__)
 __attribute__((format(printf, 3, 4)))
@@ -110,14 +123,28 @@ __attribute__((format(printf, 3, 4)))
 static int
 h5fail(const rh5_writer *w, pd_error *err, const char *fmt, ...)
 {
-    char what[320], why[200] = "";
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(what, sizeof what, fmt, ap);
+    int rc = vh5fail(w, err, fmt, ap);
     va_end(ap);
-    H5Ewalk2(H5E_DEFAULT, H5E_WALK_UPWARD, first_desc, why);
-    if (why[0]) return pd_error_set(err, PD_EIO, "%s: %s (hdf5: %s)", w->path, what, why);
-    return pd_error_set(err, PD_EIO, "%s: %s", w->path, what);
+    return rc;
+}
+
+/* h5fail for a failed append: the writer is broken from then on, and keeps the message for
+ * rh5_finish. */
+#if defined(__GNUC__)
+__attribute__((format(printf, 3, 4)))
+#endif
+static int
+h5break(rh5_writer *w, pd_error *err, const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    int rc = vh5fail(w, &w->why, fmt, ap);
+    va_end(ap);
+    w->broken = 1;
+    if (err) *err = w->why;
+    return rc;
 }
 
 /* HDF5 prints its error stack by default, per thread in a thread-safe build; every entry point
@@ -701,24 +728,18 @@ int rh5_write_frame(rh5_writer *w, double time, long long step, const double *po
 
     const void *data[NFRAME_DS] = {&time, &step, pos, quat, vel, angvel, w->world};
     for (int k = 0; k < NFRAME_DS; k++) {
-        if (w->fr[k].id >= 0 && append_row(&w->fr[k], (hsize_t)w->nframes, data[k]) < 0) {
-            w->broken = 1;
-            return h5fail(w, err, "cannot append frame %lld to %s", w->nframes, w->fr[k].path);
-        }
+        if (w->fr[k].id >= 0 && append_row(&w->fr[k], (hsize_t)w->nframes, data[k]) < 0)
+            return h5break(w, err, "cannot append frame %lld to %s", w->nframes, w->fr[k].path);
     }
     for (int i = 0; i < w->nwalls; i++) {
         rh5_wall *wl = &w->walls[i];
         if (!wl->moving) continue;
         wall_at(wl, time, w->wall_world);
-        if (append_row(&wl->frame, (hsize_t)w->nframes, w->wall_world) < 0) {
-            w->broken = 1;
-            return h5fail(w, err, "cannot append frame %lld to %s", w->nframes, wl->frame.path);
-        }
+        if (append_row(&wl->frame, (hsize_t)w->nframes, w->wall_world) < 0)
+            return h5break(w, err, "cannot append frame %lld to %s", w->nframes, wl->frame.path);
     }
-    if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) {
-        w->broken = 1;
-        return h5fail(w, err, "cannot flush frame %lld", w->nframes);
-    }
+    if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0)
+        return h5break(w, err, "cannot flush frame %lld", w->nframes);
     w->times[w->nframes++] = time;
     return PD_OK;
 }
@@ -744,22 +765,16 @@ int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_e
     for (int k = 0; k < NSTATS_DS + w->nwalls; k++) {
         const rh5_ext *e = k < NSTATS_DS ? &w->st[k] : &w->walls[k - NSTATS_DS].force;
         const void *d = k < NSTATS_DS ? data[k] : &wall_forces[3 * (k - NSTATS_DS)];
-        if (append_row(e, (hsize_t)w->nstats, d) < 0) {
-            w->broken = 1;
-            return h5fail(w, err, "cannot append stats row %lld to %s", w->nstats, e->path);
-        }
+        if (append_row(e, (hsize_t)w->nstats, d) < 0)
+            return h5break(w, err, "cannot append stats row %lld to %s", w->nstats, e->path);
     }
     for (int k = 0; k < RH5_NSTAGES; k++) {
-        if (append_row(&w->stage[k], (hsize_t)w->nstats, &stage_time[k]) < 0) {
-            w->broken = 1;
-            return h5fail(w, err, "cannot append stats row %lld to %s", w->nstats,
-                          w->stage[k].path);
-        }
+        if (append_row(&w->stage[k], (hsize_t)w->nstats, &stage_time[k]) < 0)
+            return h5break(w, err, "cannot append stats row %lld to %s", w->nstats,
+                           w->stage[k].path);
     }
-    if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) {
-        w->broken = 1;
-        return h5fail(w, err, "cannot flush stats row %lld", w->nstats);
-    }
+    if (H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0)
+        return h5break(w, err, "cannot flush stats row %lld", w->nstats);
     w->nstats++;
     return PD_OK;
 }
@@ -819,11 +834,220 @@ static void free_writer(rh5_writer *w)
     free(w);
 }
 
+/* ---- keeping what a failed write leaves ---------------------------------------------------- */
+
+/*
+ * After a failed write (a full disk, mostly) the file on disk holds every frame and stats row up
+ * to the last flushed, and perhaps part of the one being written: the datasets already extended
+ * for it one row longer than the others, that row's chunks missing (read as zeros) or written.
+ * rh5_finish (finish_broken) then:
+ *  1. closes HDF5's session without writing anything more (close_detached): a close would retry
+ *     the writes that failed, and cutting the datasets back in that session corrupts their chunk
+ *     index (HDF5 1.10 dropped an earlier, flushed chunk);
+ *  2. opens the file anew and cuts every series back to its last complete row (H5Dset_extent:
+ *     nframes and nstats count only rows written to every dataset of their series and flushed);
+ *     this rewrites object headers in place, which a full disk allows;
+ *  3. opens it read-only, as a reader will, and checks it (check_kept): root attributes readable,
+ *     every series exactly those rows with every chunk holding them stored, /frames/time the
+ *     times written.
+ * Only then is the file kept, under its .partial name: it is no complete result (it has no status
+ * attribute and no XDMF file, which need the space that ran out). Otherwise it is removed.
+ */
+
+/* What a series dataset does with the rows it should have: cut to them, or check them. */
+typedef int (*series_fn)(hid_t f, const rh5_ext *e, long long rows);
+
+/* Applies fn to every /frames and /stats dataset; 0 when every call returned 0. */
+static int each_series(const rh5_writer *w, hid_t f, series_fn fn)
+{
+    int rc = 0;
+    for (int k = 0; k < NFRAME_DS && !rc; k++)
+        if (w->fr[k].rank > 0) rc = fn(f, &w->fr[k], w->nframes);
+    for (int i = 0; i < w->nwalls && !rc; i++) /* a moving wall's frame_vertices */
+        if (w->walls[i].frame.rank > 0) rc = fn(f, &w->walls[i].frame, w->nframes);
+    for (int k = 0; k < NSTATS_DS && !rc; k++)
+        rc = fn(f, &w->st[k], w->nstats);
+    for (int i = 0; i < w->nwalls && !rc; i++)
+        rc = fn(f, &w->walls[i].force, w->nstats);
+    for (int k = 0; k < RH5_NSTAGES && !rc; k++)
+        rc = fn(f, &w->stage[k], w->nstats);
+    return rc;
+}
+
+/* The shape of series dataset ds: 0 when it has e's rank and row shape and at least `rows` rows;
+ * dims and, when chunk is not NULL, its chunk shape are filled in. */
+static int series_shape(hid_t ds, const rh5_ext *e, long long rows, hsize_t dims[3],
+                        hsize_t chunk[3])
+{
+    hid_t sp = H5Dget_space(ds), pl = chunk ? H5Dget_create_plist(ds) : -1;
+    int ok = sp >= 0 && H5Sget_simple_extent_ndims(sp) == e->rank &&
+             H5Sget_simple_extent_dims(sp, dims, NULL) == e->rank && dims[0] >= (hsize_t)rows &&
+             (!chunk || (pl >= 0 && H5Pget_chunk(pl, e->rank, chunk) == e->rank));
+    for (int k = 1; k < e->rank; k++)
+        ok = ok && dims[k] == e->tail[k - 1];
+    if (pl >= 0) H5Pclose(pl);
+    if (sp >= 0) H5Sclose(sp);
+    return ok ? 0 : -1;
+}
+
+static int cut_series(hid_t f, const rh5_ext *e, long long rows)
+{
+    hsize_t dims[3] = {0, 0, 0};
+    hid_t ds = H5Dopen2(f, e->path, H5P_DEFAULT);
+    int ok = ds >= 0 && series_shape(ds, e, rows, dims, NULL) == 0;
+    dims[0] = (hsize_t)rows;
+    ok = ok && H5Dset_extent(ds, dims) >= 0;
+    if (ds >= 0 && H5Dclose(ds) < 0) ok = 0;
+    return ok ? 0 : -1;
+}
+
+/* Exactly `rows` rows, and every chunk holding them stored: a chunk missing from the index reads
+ * as zeros, it does not fail. The chunks are counted (one walk of the index; those past the rows
+ * were cut); make_ext's chunks split rows along axis 1 only. */
+static int check_series(hid_t f, const rh5_ext *e, long long rows)
+{
+    hsize_t dims[3] = {0, 0, 0}, chunk[3] = {1, 1, 1}, stored = 0;
+    hid_t ds = H5Dopen2(f, e->path, H5P_DEFAULT), sp = ds >= 0 ? H5Dget_space(ds) : -1;
+    int ok = sp >= 0 && series_shape(ds, e, rows, dims, chunk) == 0 && dims[0] == (hsize_t)rows &&
+             H5Dget_num_chunks(ds, sp, &stored) >= 0;
+    hsize_t cols = e->rank > 1 ? dims[1] : 1, step = e->rank > 1 ? chunk[1] : 1;
+    ok = ok && stored == (dims[0] + chunk[0] - 1) / chunk[0] * ((cols + step - 1) / step);
+    if (sp >= 0) H5Sclose(sp);
+    if (ds >= 0 && H5Dclose(ds) < 0) ok = 0;
+    return ok ? 0 : -1;
+}
+
+/* Opens the .partial in a new HDF5 session. The stdio driver: a session of the default (sec2)
+ * driver would share the writer's when close_detached left that one open, while one of another
+ * driver is its own. HDF5's file locking is off: our flock holds the file. */
+static hid_t reopen(const rh5_writer *w, unsigned flags)
+{
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), f = -1;
+    if (fapl >= 0 && H5Pset_fapl_stdio(fapl) >= 0 && H5Pset_file_locking(fapl, 0, 1) >= 0)
+        f = H5Fopen(w->partial, flags, fapl);
+    if (fapl >= 0) H5Pclose(fapl);
+    return f;
+}
+
+/* Reads one root attribute whole (all of ours are scalars); for H5Aiterate2. */
+static herr_t read_root_attr(hid_t obj, const char *name, const H5A_info_t *info, void *data)
+{
+    (void)info;
+    (void)data;
+    hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
+    hid_t t = a >= 0 ? H5Aget_type(a) : -1, sp = a >= 0 ? H5Aget_space(a) : -1;
+    int ok = t >= 0 && sp >= 0 && H5Sget_simple_extent_npoints(sp) == 1;
+    if (ok && H5Tis_variable_str(t) > 0) {
+        char *s = NULL;
+        ok = H5Aread(a, t, &s) >= 0 && s;
+        if (s) H5free_memory(s);
+    } else {
+        unsigned char buf[64];
+        ok = ok && H5Tget_size(t) <= sizeof buf && H5Aread(a, t, buf) >= 0;
+    }
+    if (sp >= 0) H5Sclose(sp);
+    if (t >= 0) H5Tclose(t);
+    if (a >= 0) H5Aclose(a);
+    return ok ? 0 : -1;
+}
+
+/* What a reader finds in the closed .partial: its root attributes readable, every series as
+ * counted (check_series), /frames/time the times written. 0 when all holds. */
+static int check_kept(const rh5_writer *w)
+{
+    hid_t f = reopen(w, H5F_ACC_RDONLY);
+    double *t = malloc((size_t)w->nframes * sizeof *t);
+    hsize_t at = 0;
+    int ok = f >= 0 && t &&
+             H5Aiterate2(f, H5_INDEX_NAME, H5_ITER_NATIVE, &at, read_root_attr, NULL) >= 0 &&
+             each_series(w, f, check_series) == 0;
+    hid_t ds = ok ? H5Dopen2(f, "/frames/time", H5P_DEFAULT) : -1;
+    ok = ds >= 0 && H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, t) >= 0 &&
+         memcmp(t, w->times, (size_t)w->nframes * sizeof *t) == 0;
+    if (ds >= 0) H5Dclose(ds);
+    if (f >= 0 && H5Fclose(f) < 0) ok = 0;
+    free(t);
+    return ok ? 0 : -1;
+}
+
+/*
+ * Ends the writer's HDF5 session without writing to the file: the file descriptor HDF5 holds is
+ * first pointed at an anonymous memory file (dup2 over the one H5Fget_vfd_handle gives), where
+ * the close writes what it still has. 0 when HDF5 no longer writes to the file: the session
+ * closed, or failed to close (a file-size limit applies to the memory file too) but holds only
+ * the memory file (counted by pd_results_unclosed); -1 when the descriptor could not be moved.
+ */
+static int close_detached(rh5_writer *w)
+{
+    int *fdp = NULL;
+    int mem = w->file >= 0 ? memfd_create("rh5-detached", MFD_CLOEXEC) : -1;
+    int moved =
+        w->file < 0 || (mem >= 0 && H5Fget_vfd_handle(w->file, H5P_DEFAULT, (void **)&fdp) >= 0 &&
+                        fdp && dup2(mem, *fdp) >= 0);
+    if (mem >= 0) close(mem);
+    close_file(w);
+    return moved ? 0 : -1;
+}
+
+/* Steps 1-3 above: NULL when the file is kept, else why it is not. */
+static const char *salvage(rh5_writer *w)
+{
+    /* The superblock may already give the file's new end while the writes that reach it failed:
+     * HDF5 then refuses to open the file ("truncated file"). It is lengthened to that end with a
+     * hole, which takes no space; what the failed writes left there is cut away or found missing
+     * below. */
+    hsize_t end = 0;
+    if (w->file < 0 || H5Fget_filesize(w->file, &end) < 0) end = 0;
+    if (close_detached(w) < 0) return "its HDF5 session could not be detached from it";
+    if (w->nframes == 0) return "no frame had been written";
+    struct stat st;
+    if (fstat(w->lock_fd, &st) == 0 && (hsize_t)st.st_size < end &&
+        ftruncate(w->lock_fd, (off_t)end) != 0)
+        return "it could not be lengthened to the end its superblock gives";
+    hid_t f = reopen(w, H5F_ACC_RDWR);
+    int cut = f >= 0 && each_series(w, f, cut_series) == 0;
+    if (f >= 0 && H5Fclose(f) < 0) {
+        unclosed_files++; /* that session would write no more than the cut */
+        cut = 0;
+    }
+    if (!cut) return "its datasets could not be cut back to the last whole row";
+    if (check_kept(w) < 0) return "it could not be read back whole";
+    return NULL;
+}
+
+/* rh5_finish after a failed write: keeps what it can, restating the failure and saying what
+ * became of the frames. */
+static int finish_broken(rh5_writer *w, pd_error *err)
+{
+    const char *why = w->why.msg[0] ? w->why.msg : "an earlier write failed";
+    const char *lost = salvage(w);
+    int rc;
+    if (lost) {
+        remove(w->partial);
+        rc = pd_error_set(err, PD_EIO, "%s; result discarded: %s", why, lost);
+    } else if (w->nframes == 1) {
+        rc = pd_error_set(err, PD_EIO,
+                          "%s; the 1 frame at t = %.6g s is kept in '%s' (incomplete, so not "
+                          "renamed)",
+                          why, w->times[0], w->partial);
+    } else {
+        rc = pd_error_set(err, PD_EIO,
+                          "%s; the %lld frames up to t = %.6g s are kept in '%s' (incomplete, so "
+                          "not renamed)",
+                          why, w->nframes, w->times[w->nframes - 1], w->partial);
+    }
+    free_writer(w);
+    return rc;
+}
+
 void rh5_abort(rh5_writer *w)
 {
     if (!w) return;
     quiet();
-    close_file(w);
+    if (w->broken)
+        close_detached(w); /* without retrying the writes that failed */
+    else
+        close_file(w);
     remove(w->partial);
     free_writer(w);
 }
@@ -924,6 +1148,11 @@ long long rh5_frames(const rh5_writer *w)
     return w ? w->nframes : 0;
 }
 
+int rh5_broken(const rh5_writer *w)
+{
+    return w ? w->broken : 0;
+}
+
 int rh5_close(rh5_writer *w, pd_error *err)
 {
     return rh5_finish(w, "complete", NULL, err);
@@ -933,16 +1162,19 @@ int rh5_finish(rh5_writer *w, const char *status, const char *message, pd_error 
 {
     if (!w) return pd_error_set(err, PD_EINVAL, "rh5_finish: no writer");
     quiet();
+    if (w->broken) return finish_broken(w, err);
     int rc = PD_OK;
-    if (w->broken)
-        rc = pd_error_set(err, PD_EIO, "%s: result discarded: an earlier write failed", w->path);
-    else if (w->n == 0)
+    if (w->n == 0)
         rc = pd_error_set(err, PD_EINVAL, "%s: result discarded: no particles were set", w->path);
     else if (!status || !status[0])
         rc = pd_error_set(err, PD_EINVAL, "%s: result discarded: no status given", w->path);
     else if (put_str(w->file, "status", status) < 0 ||
-             (message && put_str(w->file, "status_message", message) < 0))
-        rc = h5fail(w, err, "cannot write the root attribute 'status'");
+             (message && put_str(w->file, "status_message", message) < 0) ||
+             H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) {
+        /* every frame is written: a full disk here costs only the status */
+        h5break(w, NULL, "cannot write the root attribute 'status'");
+        return finish_broken(w, err);
+    }
     if (close_file(w) < 0 && rc == PD_OK) rc = h5fail(w, err, "cannot close '%s'", w->partial);
 
     size_t len = strlen(w->path);

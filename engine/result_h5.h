@@ -51,8 +51,14 @@
  * rh5_finish, so a half-written file is never mistaken for a result; both also write
  * "<path>.xmf".
  *
- * After a failed write the writer refuses further writes and rh5_close (or rh5_finish) discards
- * the file: a result with datasets of unequal length would mislead a reader.
+ * After a failed write (a full disk, mostly) the writer refuses further writes, and rh5_close or
+ * rh5_finish keep what was written when they can: every /frames and /stats dataset is cut back to
+ * its last whole row (a frame whose position was written but not its velocity, or half a stats
+ * row, is dropped: no reader sees datasets of unequal length or rows of fill values), the file is
+ * read back to check it, and left as "<path>.partial", not renamed: it is no complete result (no
+ * status attribute, no XDMF file). A file that fails the check is removed. Either way the error
+ * restates the failure and says which ("...; the 36 frames up to t = 0.0144 s are kept in
+ * 'out.h5.partial' (incomplete, so not renamed)" or "...; result discarded: <why>").
  *
  * A writer is used from one thread at a time; different writers may live in different threads
  * (Debian's HDF5 is built thread-safe and serialises its calls).
@@ -126,8 +132,10 @@ int rh5_write_stats(rh5_writer *w, double time, long long step, double kinetic_e
 
 /*
  * Closes the file, writes "<path>.xmf" (through a temporary name), renames "<path>.partial" to
- * path, and frees the writer. On failure the partial file is removed. The writer is freed
- * whatever the outcome; w may not be used afterwards. The root attribute status is "complete".
+ * path, and frees the writer. On failure the partial file is removed, except where a write failed
+ * (rh5_broken, or the status attribute did not fit): the frames so far are then kept in it when
+ * they read back whole (above), and the error says so. The writer is freed whatever the outcome;
+ * w may not be used afterwards. The root attribute status is "complete".
  */
 int rh5_close(rh5_writer *w, pd_error *err);
 
@@ -135,11 +143,15 @@ int rh5_close(rh5_writer *w, pd_error *err);
  * rh5_close for a run that stopped before its end (cancelled, diverged, or failed on the device)
  * but whose frames so far are sound: the root attributes status (e.g. "cancelled") and, when
  * message is not NULL, status_message (why it stopped) tell a reader that the frames end early.
+ * After a failed write neither is written (the error restates that failure instead).
  */
 int rh5_finish(rh5_writer *w, const char *status, const char *message, pd_error *err);
 
 /* Frames written so far (0 for NULL). */
 long long rh5_frames(const rh5_writer *w);
+
+/* 1 when a write failed and the writer refuses further writes (0 for NULL). */
+int rh5_broken(const rh5_writer *w);
 
 /* Closes and removes the partial file and frees the writer (failed or cancelled jobs). Accepts
  * NULL. */

@@ -401,10 +401,21 @@ done:
     if (w && rc != PD_OK && rh5_frames(w) > 0) {
         /* Stopped early (cancelled, diverged, a device error): the frames written so far are
          * sound (a divergence is caught before its frame is written), and a user who stops a
-         * long run wants them. The file says so in its root attribute status. */
+         * long run wants them. The file says so in its root attribute status. After a failed
+         * write the writer keeps them in the .partial if it can (result_kept stays 0: output
+         * path holds nothing), and its error replaces ours: it restates ours and says where. */
         pd_error ferr = {0};
+        int broken = rh5_broken(w);
         pr.result_kept = rh5_finish(w, pd_run_status(rc), err ? err->msg : NULL, &ferr) == PD_OK;
         w = NULL;
+        if (!pr.result_kept && err) {
+            if (broken) { /* ferr restates the failed write and says what became of its frames */
+                snprintf(err->msg, sizeof err->msg, "%s", ferr.msg);
+            } else {
+                size_t len = strlen(err->msg);
+                snprintf(err->msg + len, sizeof err->msg - len, "; %s", ferr.msg);
+            }
+        }
     }
     if (w) rh5_abort(w);
     pr.wall_seconds = now_seconds() - t_start;

@@ -60,7 +60,21 @@ static int ends_with(const char *s, const char *suffix)
     return n >= k && !strcmp(s + n - k, suffix);
 }
 
-/* After a crash: half-written results and files of deleted jobs go; uploads left midway too. */
+/* Whether name is the .partial a failed job's error says its frames were kept in (the run's
+ * result write failed, a full disk: pd_run keeps what was written under that name). */
+static int kept_partial(job_store *st, const char *id, const char *name)
+{
+    job_rec j;
+    if (job_store_get(st, id, NULL, &j) != JS_OK) return 0;
+    char quoted[300];
+    snprintf(quoted, sizeof quoted, "/%s' ", name);
+    int kept = !strcmp(j.status, "failed") && j.error && strstr(j.error, quoted);
+    job_rec_free(&j);
+    return kept;
+}
+
+/* After a crash: half-written results and files of deleted jobs go, but not the frames a failed
+ * job's error says were kept; uploads left midway go too. */
 static void sweep(job_store *st, const char *results, const char *meshes)
 {
     char path[4700], id[24];
@@ -69,6 +83,7 @@ static void sweep(job_store *st, const char *results, const char *meshes)
     while (d && (e = readdir(d))) {
         if (!job_file(e->d_name, id)) continue;
         if (!ends_with(e->d_name, ".partial") && job_store_exists(st, id) != 0) continue;
+        if (ends_with(e->d_name, ".h5.partial") && kept_partial(st, id, e->d_name)) continue;
         snprintf(path, sizeof path, "%s/%s", results, e->d_name);
         if (unlink(path) == 0) fprintf(stderr, "polydemd: removed stray '%s'\n", path);
     }

@@ -158,7 +158,8 @@ if [ "$check_rc" -eq 0 ]; then ok overlap_push_is_not_divergence; else bad overl
 
 # a full disk (a small tmpfs; needs root to mount, skipped otherwise): the error names it and the
 # run exits 1 (HDF5's exit-time clean-up of the file it could not close used to segfault: 139);
-# when only the XDMF file does not fit, the complete result is kept
+# when it fills after some frames, those are kept in the .partial; when only the XDMF file does
+# not fit, the complete result is kept
 mkdir -p "$tmp/small"
 if mount -t tmpfs -o size=100k tmpfs "$tmp/small" 2>/dev/null; then
     sed -e 's/"output_interval": 0.1/"output_interval": 0.0004/' "$tmp/fall.json" >"$tmp/frames.json"
@@ -166,6 +167,30 @@ if mount -t tmpfs -o size=100k tmpfs "$tmp/small" 2>/dev/null; then
     rc=$?
     if [ "$rc" -eq 1 ] && grep -q "No space left on device" "$tmp/out"; then ok disk_full_is_an_error_not_a_crash
     else bad disk_full_is_an_error_not_a_crash "exit $rc: $(cat "$tmp/out")"; fi
+    umount "$tmp/small"
+    # the disk fills after some frames: the frames so far are kept in the .partial (not renamed:
+    # it is incomplete), which the error names with their count and last time; every dataset of
+    # /frames holds exactly that many whole frames and every /stats column the same rows
+    mount -t tmpfs -o size=150k tmpfs "$tmp/small"
+    $POLYDEM run "$tmp/frames.json" -o "$tmp/small/r.h5" --quiet >"$tmp/out" 2>&1
+    rc=$?
+    kept=$(sed -n "s/.*No space left on device.*; the \([0-9]*\) frames up to t = \([0-9.e-]*\) s are kept in '.*small\/r\.h5\.partial'.*/\1 \2/p" "$tmp/out")
+    n=${kept%% *}
+    h5ls -r "$tmp/small/r.h5.partial" >"$tmp/ls" 2>&1
+    rows() { sed -n "s|^$1 *Dataset {\([0-9]*\)/Inf.*|\1|p" "$tmp/ls"; }
+    st=$(rows /stats/time)
+    shapes="$(rows /frames/time) $(rows /frames/step) $(rows /frames/position) $(rows /frames/orientation)"
+    shapes="$shapes $(rows /frames/velocity) $(rows /frames/angular_velocity)"
+    want="$n $n $n $n $n $n"
+    stats="$(rows /stats/kinetic_energy) $(rows /stats/contacts) $(rows /stats/wall_force/floor)"
+    last=$(h5dump -d /frames/time -s $((${n:-1} - 1)) -c 1 "$tmp/small/r.h5.partial" 2>/dev/null |
+        sed -n 's/^ *([0-9]*): \([0-9.e-]*\)$/\1/p')
+    if [ "$rc" -eq 1 ] && [ -n "$n" ] && [ "$n" -ge 2 ] && [ ! -e "$tmp/small/r.h5" ] &&
+        [ "$shapes" = "$want" ] && [ -n "$st" ] && [ "$stats" = "$st $st $st" ] &&
+        h5dump "$tmp/small/r.h5.partial" >/dev/null 2>&1 &&
+        awk -v a="$last" -v b="${kept#* }" 'BEGIN { exit !(a != "" && a - b < 1e-9 && b - a < 1e-9) }'; then
+        ok disk_full_keeps_frames_so_far
+    else bad disk_full_keeps_frames_so_far "exit $rc, kept '$kept', frames '$shapes', stats '$st' '$stats', last time '$last': $(cat "$tmp/out"; ls -l "$tmp/small")"; fi
     umount "$tmp/small"
     sed -e 's/"duration": 0.4/"duration": 0.02/' -e 's/"output_interval": 0.1/"output_interval": 0.0002/' \
         "$tmp/fall.json" >"$tmp/frames.json"

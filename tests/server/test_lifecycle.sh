@@ -5,7 +5,8 @@
 # SIGTERM during a run exits 0, keeps no file, and the job runs again after the restart,
 # after a higher-priority job and before a later one of equal priority; after kill -9 the
 # restarted daemon queues the interrupted job again, serves no half-written result, and the
-# job succeeds. tests/server/long_job.json runs about 5 s (2026-11-30, 2 cores): the cancel must
+# job succeeds; a job whose disk fills fails saying where its frames so far are kept, and serves
+# no result. tests/server/long_job.json runs about 5 s (2026-11-30, 2 cores): the cancel must
 # come while it runs, so size it up again when the engine gets faster. Prints "N passed, N failed".
 . tests/server/lib.sh
 
@@ -126,6 +127,37 @@ code=$(req GET "/v1/jobs/$l4")
 check thrice_crashed_job_failed "200 failed" "$code $(jstr status)"
 check thrice_crashed_job_says_why true "$(jstr error | grep -q 'while running this job 3 times' && echo true)"
 check thrice_crashed_logged true "$(grep -q '1 job(s) failed' "$LOG" && echo true)"
+
+# ---- the disk fills under a job (a small tmpfs over the results; needs root, skipped
+#      otherwise): the job fails with an error that names the .partial its frames so far are kept
+#      in, claims and serves no result, and the file outlives a restart until the job is deleted
+if mount -t tmpfs -o size=150k tmpfs "$data/results" 2>/dev/null; then
+    cat >"$tmp/fill.json" <<'JSON'
+{"name": "fill", "time": {"dt": 2e-5, "duration": 0.4, "output_interval": 0.0004},
+ "materials": {"m": {"density": 1000, "youngs_modulus": 1e7},
+               "s": {"density": 7800, "youngs_modulus": 2e11, "poisson_ratio": 0.3}},
+ "interactions": [{"between": ["m", "m"]}, {"between": ["m", "s"], "damping": 0.5}],
+ "shapes": {"b": {"sphere": {}}},
+ "particles": [{"shape": "b", "material": "m", "list": [{"position": [0, 0, 0.5], "size": 0.05}]}],
+ "walls": [{"name": "floor", "material": "s", "box": {"min": [-1, -1, -0.1], "max": [1, 1, 0]}}]}
+JSON
+    l5=$(submit "$tmp/fill.json")
+    check disk_full_job_failed failed "$(wait_status "$l5" failed 60)"
+    code=$(req GET "/v1/jobs/$l5")
+    check disk_full_job_says_what_is_kept "200 true" "$code $(jstr error | grep -q "No space left on device.*; the [0-9]* frames up to t = [0-9.e-]* s are kept in '.*/$l5.h5.partial'" && echo true)"
+    check disk_full_job_claims_no_result false "$(jget "$tmp/body" 'd["result_available"]')"
+    code=$(req GET "/v1/jobs/$l5/result")
+    check disk_full_job_serves_no_result "409 result_not_ready" "$code $(jstr code)"
+    check disk_full_partial_readable true "$(h5ls "$data/results/$l5.h5.partial/frames/time" >/dev/null 2>&1 && echo true)"
+    stop_daemon TERM
+    start_daemon "$data" --no-selftest --config "$tmp/fast.conf" || { umount "$data/results"; summary; exit 1; }
+    check disk_full_partial_kept_by_restart true "$([ -e "$data/results/$l5.h5.partial" ] && echo true)"
+    code=$(req DELETE "/v1/jobs/$l5")
+    check disk_full_delete_removes_partial "204 0" "$code $(ls "$data/results" | grep -c "^$l5")"
+    umount "$data/results"
+else
+    echo "skip disk_full tests: cannot mount a tmpfs (needs root)"
+fi
 stop_daemon TERM && ok sigterm_idle_exit_0
 
 summary

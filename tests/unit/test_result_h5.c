@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <hdf5.h>
@@ -679,57 +680,232 @@ TEST(error_bad_input_keeps_writer_usable)
     remove_result(path);
 }
 
-/* A write that fails inside HDF5 (the file-size limit is hit) is reported with the file and the
- * dataset, the writer refuses to go on, and closing discards the broken result. */
-TEST(error_disk_full_breaks_writer)
+/* A writer of path with the standard shapes, wall and N particles set; NULL (a failed check)
+ * when a call failed. */
+static rh5_writer *begin_writer(const char *path, int fields, pd_error *err)
+{
+    rh5_writer *w = NULL;
+    CHECK_EQ_INT(0, rh5_create(path, SCENARIO, 1, 1e-5, fields, &w, err));
+    if (!w) return NULL;
+    int rc = rh5_add_shape(w, "tet", "mesh", TET_V, 4, TET_T, 4, 8.0 / 3, err);
+    if (!rc) rc = rh5_add_shape(w, "cube", "mesh", CUBE_V, 8, CUBE_T, 12, 1.0, err);
+    if (!rc) rc = rh5_set_particles(w, N, P_SHAPE, P_MAT, P_SIZE, P_MASS, err);
+    CHECK_EQ_INT(0, rc);
+    if (rc) {
+        rh5_abort(w);
+        return NULL;
+    }
+    return w;
+}
+
+/* The file-size limit before limit_file_size. */
+static struct rlimit saved_limit;
+
+static void lift_limit(int sig)
+{
+    (void)sig;
+    setrlimit(RLIMIT_FSIZE, &saved_limit);
+}
+
+/*
+ * Limits files to `bytes`: the first write past it fails with EFBIG, as on a full disk, and the
+ * limit is then lifted at once (SIGXFSZ's handler), as when space comes free: HDF5's further
+ * writes succeed, whatever state the failed one left the file in. unlimit_file_size restores.
+ */
+static void limit_file_size(rlim_t bytes)
+{
+    getrlimit(RLIMIT_FSIZE, &saved_limit);
+    struct rlimit lim = saved_limit;
+    lim.rlim_cur = bytes;
+    signal(SIGXFSZ, lift_limit);
+    setrlimit(RLIMIT_FSIZE, &lim);
+}
+
+static void unlimit_file_size(void)
+{
+    setrlimit(RLIMIT_FSIZE, &saved_limit);
+    signal(SIGXFSZ, SIG_DFL);
+}
+
+/* Rows of dataset path in file (-1 when it cannot be read). */
+static long long rows_of(hid_t f, const char *path)
+{
+    hid_t d = H5Dopen2(f, path, H5P_DEFAULT);
+    hid_t sp = d >= 0 ? H5Dget_space(d) : -1;
+    hsize_t dims[3] = {0, 0, 0};
+    long long n =
+        sp >= 0 && H5Sget_simple_extent_dims(sp, dims, NULL) > 0 ? (long long)dims[0] : -1;
+    if (sp >= 0) H5Sclose(sp);
+    if (d >= 0) H5Dclose(d);
+    return n;
+}
+
+/* Reads dataset path of a kept .partial whole (n doubles) and checks that nothing in it is the
+ * fill value 0 where a write put 1 + row; 0 when every row holds its values. */
+static int rows_written(hid_t f, const char *path, long long rows, int per_row)
+{
+    size_t n = (size_t)rows * (size_t)per_row;
+    double *v = malloc(n * sizeof *v + 1);
+    hid_t d = H5Dopen2(f, path, H5P_DEFAULT);
+    int ok = v && d >= 0 && H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0;
+    for (size_t k = 0; ok && k < n; k++)
+        ok = v[k] == 1 + (double)(k / (size_t)per_row);
+    if (d >= 0) H5Dclose(d);
+    free(v);
+    return ok ? 0 : -1;
+}
+
+/*
+ * A write that fails inside HDF5 (the file-size limit is hit mid-run, as a full disk would) is
+ * reported with the file and the dataset, and the writer refuses to go on. Closing it, with the
+ * limit still there, keeps the .partial: every series cut back to its last whole row (a frame
+ * whose position was written but not its orientation is gone), readable, the count and last time
+ * in the message, and no file left open inside HDF5.
+ */
+TEST(error_disk_full_keeps_frames_so_far)
 {
     enum { NP = 2000 }; /* a frame is ~112 KB: the limit is hit within a few frames */
-    const char *path = tmp_path("full.h5");
+    const char *path = tmp_path("full.h5"), *partial = tmp_path("full.h5.partial");
     pd_error err = {0};
     rh5_writer *w = NULL;
     int *shape = calloc(NP, sizeof *shape), *mat = calloc(NP, sizeof *mat);
     double *size = calloc(NP, sizeof *size), *mass = calloc(NP, sizeof *mass);
     double *pos = calloc(3 * NP, sizeof *pos), *q = calloc(4 * NP, sizeof *q);
+    int unclosed = pd_results_unclosed();
     CHECK_EQ_INT(0, rh5_create(path, "{}", 0, 1e-3, 0, &w, &err));
     if (!w || !shape || !mat || !size || !mass || !pos || !q) goto out;
-    for (int i = 0; i < NP; i++)
-        q[4 * i] = 1;
     CHECK_EQ_INT(0, rh5_add_shape(w, "cube", "mesh", CUBE_V, 8, CUBE_T, 12, 1, &err));
+    CHECK_EQ_INT(0, rh5_add_wall(w, LID, WALL_V, 4, WALL_T, 2, LID_MOTION, &err)); /* moving */
     CHECK_EQ_INT(0, rh5_set_particles(w, NP, shape, mat, size, mass, &err));
 
-    struct rlimit old, lim;
-    getrlimit(RLIMIT_FSIZE, &old);
-    lim = old;
-    lim.rlim_cur = 512 * 1024;
-    void (*prev)(int) = signal(SIGXFSZ, SIG_IGN); /* write() fails with EFBIG instead */
-    setrlimit(RLIMIT_FSIZE, &lim);
-    int rc = 0, frames = 0;
-    while (frames < 20 && (rc = rh5_write_frame(w, frames, frames, pos, q, NULL, NULL, &err)) == 0)
-        frames++;
-    setrlimit(RLIMIT_FSIZE, &old);
-    signal(SIGXFSZ, prev);
-
+    limit_file_size(512 * 1024);
+    double wf[3] = {0, 0, 1};
+    int rc = 0, frames = 0, stats = 0;
+    double stage[RH5_NSTAGES] = {1, 1, 1, 1, 1};
+    while (frames < 20 && rc == 0) {
+        for (int k = 0; k < 3 * NP; k++)
+            pos[k] = 1 + frames;
+        for (int k = 0; k < 4 * NP; k++)
+            q[k] = 1 + frames;
+        rc = rh5_write_stats(w, 0.5 * stats, stats, 1 + stats, 0, 0, 0, 0, wf, stage, &err);
+        if (rc == 0) stats++;
+        if (rc == 0) rc = rh5_write_frame(w, 0.5 * frames, frames, pos, q, NULL, NULL, &err);
+        if (rc == 0) frames++;
+    }
     CHECK_EQ_INT(PD_EIO, rc);
-    CHECK(frames >= 1 && frames < 20);
+    CHECK(frames >= 2 && frames < 20);
     CHECK_STR_CONTAINS(err.msg, path);
     CHECK_STR_CONTAINS(err.msg, "(hdf5: ");
     CHECK_STR_CONTAINS(err.msg, "File too large)"); /* the system's reason, from the stack */
+    char first[sizeof err.msg];
+    snprintf(first, sizeof first, "%s", err.msg);
+    CHECK(rh5_broken(w));
     CHECK_EQ_INT(PD_EIO, rh5_write_frame(w, 99, 99, pos, q, NULL, NULL, &err));
     CHECK_STR_CONTAINS(err.msg, "an earlier write failed");
+
+    unlimit_file_size();
     CHECK_EQ_INT(PD_EIO, rh5_close(w, &err));
     w = NULL;
-    CHECK_STR_CONTAINS(err.msg, "result discarded");
+    char kept[600];
+    snprintf(kept, sizeof kept, "; the %d frames up to t = %.6g s are kept in '%s'", frames,
+             0.5 * (frames - 1), partial);
+    CHECK_STR_CONTAINS(err.msg, first); /* the failure restated, then what was kept */
+    CHECK_STR_CONTAINS(err.msg, kept);
     CHECK(!exists(path));
-    CHECK(!exists(tmp_path("full.h5.partial")));
     CHECK(!exists(tmp_path("full.h5.xmf")));
+    CHECK_EQ_INT(unclosed, pd_results_unclosed());
+
+    hid_t f = H5Fopen(partial, H5F_ACC_RDONLY, H5P_DEFAULT);
+    CHECK(f >= 0);
+    if (f >= 0) {
+        CHECK_EQ_INT(frames, rows_of(f, "/frames/time"));
+        CHECK_EQ_INT(frames, rows_of(f, "/frames/step"));
+        CHECK_EQ_INT(frames, rows_of(f, "/frames/position"));
+        CHECK_EQ_INT(frames, rows_of(f, "/frames/orientation"));
+        CHECK_EQ_INT(stats, rows_of(f, "/stats/time"));
+        CHECK_EQ_INT(stats, rows_of(f, "/stats/kinetic_energy"));
+        CHECK_EQ_INT(stats, rows_of(f, "/stats/stage_time/gather"));
+        CHECK_EQ_INT(stats, rows_of(f, "/stats/wall_force/" LID));
+        CHECK_EQ_INT(frames, rows_of(f, "/walls/" LID "/frame_vertices"));
+        CHECK_EQ_INT(0, rows_written(f, "/frames/position", frames, 3 * NP));
+        CHECK_EQ_INT(0, rows_written(f, "/frames/orientation", frames, 4 * NP));
+        CHECK_EQ_INT(0, rows_written(f, "/stats/kinetic_energy", stats, 1));
+        char *fmt = attr_str(f, "/", "format", 0);
+        CHECK_STR_CONTAINS(fmt, RH5_FORMAT);
+        free(fmt);
+        H5Fclose(f);
+    }
 out:
     rh5_abort(w);
+    remove_result(path);
     free(shape);
     free(mat);
     free(size);
     free(mass);
     free(pos);
     free(q);
+}
+
+/* A write that fails before any frame leaves nothing to keep: the file is removed and the error
+ * says so; no file is left open inside HDF5. */
+TEST(error_disk_full_before_a_frame_discards)
+{
+    const char *path = tmp_path("none.h5");
+    pd_error err = {0};
+    struct stat st;
+    int unclosed = pd_results_unclosed();
+    rh5_writer *w = begin_writer(path, RH5_VELOCITY, &err);
+    if (!w) return;
+    CHECK_EQ_INT(0, stat(tmp_path("none.h5.partial"), &st));
+    limit_file_size((rlim_t)st.st_size);
+    double pos[3 * N] = {0}, q[4 * N] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+    int rc = rh5_write_frame(w, 0, 0, pos, q, pos, NULL, &err); /* its chunks need new space */
+    unlimit_file_size();
+    CHECK_EQ_INT(PD_EIO, rc);
+    CHECK_EQ_INT(PD_EIO, rh5_close(w, &err));
+    CHECK_STR_CONTAINS(err.msg, "; result discarded: no frame had been written");
+    CHECK(!exists(path));
+    CHECK(!exists(tmp_path("none.h5.partial")));
+    CHECK_EQ_INT(unclosed, pd_results_unclosed());
+}
+
+/* Every frame written, but the status attribute does not fit (a long status_message on a full
+ * disk): the frames are kept in the .partial, and the error says why it has no status. */
+TEST(error_disk_full_at_status_keeps_frames)
+{
+    const char *path = tmp_path("status.h5"), *partial = tmp_path("status.h5.partial");
+    pd_error err = {0};
+    rh5_writer *w = begin_writer(path, RH5_VELOCITY, &err);
+    if (!w) return;
+    double pos[3 * N] = {0}, q[4 * N] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0};
+    for (int f = 0; f < 3; f++)
+        CHECK_EQ_INT(0, rh5_write_frame(w, 0.25 * f, f, pos, q, pos, NULL, &err));
+    struct stat st;
+    CHECK_EQ_INT(0, stat(partial, &st));
+    char *why = malloc(20000);
+    if (!why) {
+        rh5_abort(w);
+        return;
+    }
+    memset(why, 'x', 19999);
+    why[19999] = 0;
+    limit_file_size((rlim_t)st.st_size);
+    CHECK_EQ_INT(PD_EIO, rh5_finish(w, "failed", why, &err));
+    unlimit_file_size();
+    free(why);
+    CHECK_STR_CONTAINS(err.msg, "cannot write the root attribute 'status'");
+    char kept[300];
+    snprintf(kept, sizeof kept, "; the 3 frames up to t = 0.5 s are kept in '%s'", partial);
+    CHECK_STR_CONTAINS(err.msg, kept);
+    CHECK(!exists(path));
+    hid_t f = H5Fopen(partial, H5F_ACC_RDONLY, H5P_DEFAULT);
+    CHECK(f >= 0);
+    if (f >= 0) {
+        CHECK_EQ_INT(3, rows_of(f, "/frames/time"));
+        CHECK_EQ_INT(3, rows_of(f, "/frames/velocity"));
+        H5Fclose(f);
+    }
+    remove_result(path);
 }
 
 int main(void)
@@ -748,7 +924,9 @@ int main(void)
     RUN(error_bad_file_name);
     RUN(error_frame_before_particles);
     RUN(error_bad_input_keeps_writer_usable);
-    RUN(error_disk_full_breaks_writer);
+    RUN(error_disk_full_keeps_frames_so_far);
+    RUN(error_disk_full_before_a_frame_discards);
+    RUN(error_disk_full_at_status_keeps_frames);
     if (rmdir(tmpdir) != 0) printf("  warning: %s not empty\n", tmpdir);
     return TEST_DONE();
 }
