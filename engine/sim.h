@@ -50,7 +50,8 @@ typedef struct sim {
     long long step;
     sc_particles *p;    /* initial state; mass, inertia, size on the host */
     double *wall_c0;    /* 3 per wall: the wall mesh's centroid at t = 0 */
-    double *wall_local; /* the wall meshes about their centroids (concatenated), for boxes */
+    double *wall_local; /* the wall meshes about their centroids (concatenated) */
+    double *wall_lbox;  /* 6 per wall: the box of its wall_local (lo, hi), for its boxes */
     int *wall_voff;
     int walls_move;
     /* the fastest any point of a moving wall moves, m/s: |v| + |omega| times its farthest vertex
