@@ -2,7 +2,8 @@
  * mesh.c - building meshes from arrays: welding, validation, mass properties and the body frame.
  *
  * Every mesh in polydem, loaded or generated, passes through mesh_finish, so the overlap code can
- * rely on a closed, edge-manifold, consistently outward-oriented surface.
+ * rely on a closed, edge-manifold, consistently outward-oriented surface that encloses each
+ * point once (no triangles crossing: mesh_cross.c).
  */
 #include <math.h>
 #include <stdint.h>
@@ -249,10 +250,12 @@ static int shell_find(int *par, int x)
 }
 
 /* Whether the ray from p along a fixed generic direction crosses the shell's triangles an odd
- * number of times (p inside it). Plain floating point: this decides how a file's shells nest,
- * where a ray grazing an edge costs a wrong message at worst, never a wrong overlap. */
+ * number of times (1: p inside it, 0: outside), or -1 when p lies on one of them within eps: a
+ * corner of a part that touches this one, which says nothing about the nesting. Plain floating
+ * point: this decides how a file's shells nest, where a ray grazing an edge costs a wrong message
+ * at worst, never a wrong overlap. */
 static int shell_contains(const double *verts, const int *tris, const int *shell_of, int shell,
-                          int ntris, const double *p)
+                          int ntris, const double *p, double eps)
 {
     static const double dir[3] = {0.5772156649015329, 0.6180339887498949, 0.5336475097539283};
     int odd = 0;
@@ -260,13 +263,27 @@ static int shell_contains(const double *verts, const int *tris, const int *shell
         if (shell_of[t] != shell) continue;
         const double *a = vtx(verts, tris[3 * t]), *b = vtx(verts, tris[3 * t + 1]),
                      *c = vtx(verts, tris[3 * t + 2]);
-        double e1[3], e2[3], q[3], s[3], r[3]; /* Moller-Trumbore */
+        double e1[3], e2[3], q[3], s[3], r[3], n[3]; /* Moller-Trumbore */
         sub3(b, a, e1);
         sub3(c, a, e2);
+        sub3(p, a, s);
+        cross3(e1, e2, n);
+        double nn = sqrt(dot3(n, n));
+        if (fabs(dot3(n, s)) <= eps * nn) { /* within eps of the plane: inside the triangle? */
+            const double *corner[3] = {a, b, c};
+            int k = 0;
+            for (; k < 3; k++) {
+                double ed[3], d[3], m[3];
+                sub3(corner[(k + 1) % 3], corner[k], ed);
+                sub3(p, corner[k], d);
+                cross3(n, ed, m);
+                if (dot3(m, d) < -eps * nn * sqrt(dot3(ed, ed))) break;
+            }
+            if (k == 3) return -1;
+        }
         cross3(dir, e2, q);
         double det = dot3(e1, q);
         if (det == 0) continue;
-        sub3(p, a, s);
         double u = dot3(s, q) / det;
         if (u < 0 || u > 1) continue;
         cross3(s, e1, r);
@@ -277,6 +294,10 @@ static int shell_contains(const double *verts, const int *tris, const int *shell
     return odd;
 }
 
+/* Corners of each shell to judge its depth from, spread over its triangles: a corner of a part
+ * resting on another lies on it and decides nothing, so the next is tried. */
+#define SHELL_SAMPLES 32
+
 /*
  * A file may hold several closed shells (edge-connected parts): separate solids, or a hollow
  * solid whose inner shell faces inward. Each shell's orientation must agree with how deep it
@@ -284,19 +305,20 @@ static int shell_contains(const double *verts, const int *tris, const int *shell
  * is flipped (the per-shell form of the inward-mesh fix; before this, such a part subtracted its
  * volume from the rest and gave negative moments of inertia). A nested shell facing the wrong
  * way is refused: a second solid inside a solid, or a hole facing out, has no one meaning.
- * Shells that cut through each other are caught only where a corner of one lies inside the
- * other. Call on an outward mesh as a whole (total signed volume > 0) with check_edges' sorted
- * edges, which it frees.
+ * Depth is judged from a corner of each shell that lies off the other (touching parts are
+ * accepted), so shells that cut through each other are left to mesh_check_crossings; every shell
+ * is oriented before the first wrong one is reported, so that check sees final orientations and
+ * its clearer message can come first. Call on an outward mesh as a whole (total signed volume >
+ * 0) with check_edges' sorted edges. On PD_OK or PD_EMESH, *shell_out holds each triangle's shell
+ * (0, 1, ...; malloc'd).
  */
-static int orient_shells(const double *verts, int *tris, int ntris, edge_rec *e, const char *label,
-                         pd_error *err)
+static int orient_shells(const double *verts, int nverts, int *tris, int ntris, const edge_rec *e,
+                         const char *label, int **shell_out, pd_error *err)
 {
     size_t ne = 3 * (size_t)ntris;
     int *shell_of = malloc(sizeof(int) * (size_t)ntris);
-    if (!shell_of) {
-        free(e);
-        return pd_error_set(err, PD_ENOMEM, "%s: out of memory finding shells", label);
-    }
+    *shell_out = NULL;
+    if (!shell_of) return pd_error_set(err, PD_ENOMEM, "%s: out of memory finding shells", label);
     for (int t = 0; t < ntris; t++)
         shell_of[t] = t;
     for (size_t i = 0; i + 1 < ne; i += 2) { /* check_edges: every edge is used exactly twice */
@@ -316,13 +338,14 @@ static int orient_shells(const double *verts, int *tris, int ntris, edge_rec *e,
     if (nshell > 1) {
         double *vol = calloc((size_t)nshell, sizeof *vol),
                *box = malloc(sizeof(double) * 6 * (size_t)nshell);
-        int *first = malloc(sizeof(int) * (size_t)nshell);
-        if (!vol || !box || !first) {
+        int *count = calloc((size_t)nshell, sizeof *count),
+            *seen = calloc((size_t)nshell, sizeof *seen);
+        int *sample = malloc(sizeof(int) * SHELL_SAMPLES * (size_t)nshell);
+        if (!vol || !box || !count || !seen || !sample) {
             rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory finding shells", label);
             nshell = 0;
         }
         for (int k = 0; k < nshell; k++) {
-            first[k] = -1;
             for (int j = 0; j < 3; j++) {
                 box[6 * k + j] = INFINITY;
                 box[6 * k + 3 + j] = -INFINITY;
@@ -334,7 +357,7 @@ static int orient_shells(const double *verts, int *tris, int ntris, edge_rec *e,
             double bc[3];
             cross3(vtx(verts, tris[3 * t + 1]), vtx(verts, tris[3 * t + 2]), bc);
             vol[k] += dot3(a, bc) / 6; /* sign only: the origin's round-off does not matter */
-            if (first[k] < 0) first[k] = tris[3 * t];
+            count[k]++;
             for (int q = 0; q < 3; q++)
                 for (int j = 0; j < 3; j++) {
                     double x = vtx(verts, tris[3 * t + q])[j];
@@ -342,20 +365,38 @@ static int orient_shells(const double *verts, int *tris, int ntris, edge_rec *e,
                     box[6 * k + 3 + j] = fmax(box[6 * k + 3 + j], x);
                 }
         }
-        for (int k = 0; k < nshell && rc == PD_OK; k++) {
-            const double *p = vtx(verts, first[k]);
-            int depth = 0;
+        /* sample j of shell k: a corner of its triangle number j * count / SHELL_SAMPLES */
+        for (int t = 0; t < ntris && nshell; t++) {
+            int k = shell_of[t], i = seen[k]++;
+            int n = count[k] < SHELL_SAMPLES ? count[k] : SHELL_SAMPLES;
+            int j = (int)(((long long)i * n + count[k] - 1) / count[k]);
+            if (j < n && (long long)j * count[k] / n == i)
+                sample[SHELL_SAMPLES * k + j] = tris[3 * t + j % 3];
+        }
+        double eps = nshell ? mesh_touch_eps(verts, nverts) : 0;
+        for (int k = 0; k < nshell; k++) {
+            int n = count[k] < SHELL_SAMPLES ? count[k] : SHELL_SAMPLES, depth = 0;
+            const double *p = vtx(verts, sample[SHELL_SAMPLES * k]), *through = p;
             for (int o = 0; o < nshell; o++) {
-                if (o == k || p[0] < box[6 * o] || p[0] > box[6 * o + 3] || p[1] < box[6 * o + 1] ||
-                    p[1] > box[6 * o + 4] || p[2] < box[6 * o + 2] || p[2] > box[6 * o + 5])
-                    continue;
-                depth += shell_contains(verts, tris, shell_of, o, ntris, p);
+                if (o == k) continue;
+                int in = -1;
+                for (int j = 0; j < n && in < 0; j++) {
+                    p = vtx(verts, sample[SHELL_SAMPLES * k + j]);
+                    const double *b = &box[6 * o];
+                    if (p[0] < b[0] - eps || p[0] > b[3] + eps || p[1] < b[1] - eps ||
+                        p[1] > b[4] + eps || p[2] < b[2] - eps || p[2] > b[5] + eps)
+                        in = 0;
+                    else
+                        in = shell_contains(verts, tris, shell_of, o, ntris, p, eps);
+                }
+                if (in > 0 && !depth++) through = p;
             }
+            p = through;
             int out = vol[k] > 0;
             if (depth == 0 && !out) {
                 for (int t = 0; t < ntris; t++)
                     if (shell_of[t] == k) flip_triangle(tris, t);
-            } else if (depth > 0 && out != (depth % 2 == 0)) {
+            } else if (depth > 0 && out != (depth % 2 == 0) && rc == PD_OK) {
                 rc = pd_error_set(err, PD_EMESH,
                                   "%s: a shell (%d of %d, through (%g,%g,%g)) lies inside another "
                                   "(or cuts through it) facing %s: a hollow's inner shell must "
@@ -367,11 +408,35 @@ static int orient_shells(const double *verts, int *tris, int ntris, edge_rec *e,
         }
         free(vol);
         free(box);
-        free(first);
+        free(count);
+        free(seen);
+        free(sample);
     }
-    free(shell_of);
-    free(e);
+    if (rc == PD_ENOMEM)
+        free(shell_of);
+    else
+        *shell_out = shell_of;
     return rc;
+}
+
+/* nb[3 t + k]: the triangle across edge k of t (from corner k to k + 1), from check_edges'
+ * sorted edges (each used by exactly two triangles); by vertex pairs, so triangles flipped since
+ * are found all the same. NULL when out of memory. */
+static int *mesh_neighbours(const int *tris, int ntris, const edge_rec *e)
+{
+    int *nb = malloc(sizeof(int) * 3 * (size_t)ntris);
+    if (!nb) return NULL;
+    for (size_t i = 0; i + 1 < 3 * (size_t)ntris; i += 2) {
+        for (int h = 0; h < 2; h++) {
+            int t = e[i + h].tri, k = 0;
+            while (k < 2 &&
+                   !((tris[3 * t + k] == e[i].lo && tris[3 * t + (k + 1) % 3] == e[i].hi) ||
+                     (tris[3 * t + k] == e[i].hi && tris[3 * t + (k + 1) % 3] == e[i].lo)))
+                k++;
+            nb[3 * t + k] = e[i + 1 - h].tri;
+        }
+    }
+    return nb;
 }
 
 static void bbox(const double *verts, int nverts, double lo[3], double hi[3])
@@ -466,7 +531,23 @@ int mesh_finish(double *verts, int nverts, int *tris, int ntris, const char *lab
         for (int t = 0; t < ntris; t++)
             flip_triangle(tris, t);
     }
-    if ((rc = orient_shells(verts, tris, ntris, edges, label, err)) != PD_OK) goto fail;
+    /* the shells' nesting is reported after crossings: a shell cutting through another often
+     * has a corner inside it, and the crossing pair says what is wrong more plainly */
+    pd_error nesting = {0};
+    int *shell = NULL, *nb = NULL;
+    int rc_nest = orient_shells(verts, nv, tris, ntris, edges, label, &shell, &nesting);
+    if (rc_nest != PD_ENOMEM && !(nb = mesh_neighbours(tris, ntris, edges)))
+        rc_nest = pd_error_set(&nesting, PD_ENOMEM, "%s: out of memory finding neighbours", label);
+    free(edges);
+    rc = rc_nest == PD_ENOMEM ? PD_OK
+                              : mesh_check_crossings(verts, nv, tris, ntris, nb, shell, label, err);
+    if (rc == PD_OK && rc_nest != PD_OK) {
+        rc = rc_nest;
+        if (err) *err = nesting;
+    }
+    free(shell);
+    free(nb);
+    if (rc != PD_OK) goto fail;
 
     pd_mesh *m = malloc(sizeof *m);
     if (!m) {

@@ -13,12 +13,28 @@
 
 /*
  * Welds exactly equal vertices, drops unreferenced ones, validates (closed, edge-manifold,
- * consistently oriented, no zero-area triangles, positive volume), flips an inward-oriented mesh
- * and wraps the result in a pd_mesh. Takes ownership of verts and tris (malloc'd) whatever the
- * outcome. label prefixes every error message.
+ * consistently oriented, no zero-area triangles, positive volume, shells nested sensibly, no two
+ * triangles crossing), flips an inward-oriented mesh or shell and wraps the result in a pd_mesh.
+ * Takes ownership of verts and tris (malloc'd) whatever the outcome. label prefixes every error
+ * message.
  */
 int mesh_finish(double *verts, int nverts, int *tris, int ntris, const char *label, pd_mesh **out,
                 pd_error *err);
+
+/* Parts closer than this (m) touch rather than cross: MESH_TOUCH_TOL times the larger of the
+ * bounding box's diagonal and the largest coordinate's magnitude (mesh_cross.c says why). */
+#define MESH_TOUCH_TOL 1e-6
+double mesh_touch_eps(const double *verts, int nverts);
+
+/*
+ * Refuses (PD_EMESH) a mesh two of whose triangles cross: an edge of one passes through the
+ * other, or they overlap in one plane facing the same way, or a touch the surface goes on
+ * through; touching (stacked solids, a corner on a face) is accepted. Call on a closed,
+ * oriented mesh: nb[3 t + k] is the triangle across edge k of t (corners k to k + 1), shell[t]
+ * its closed shell (for the message). About O(n log n) (mesh_cross.c).
+ */
+int mesh_check_crossings(const double *verts, int nverts, const int *tris, int ntris, const int *nb,
+                         const int *shell, const char *label, pd_error *err);
 
 /* Signed volume enclosed by the triangles (positive when outward oriented). */
 double mesh_signed_volume(const double *verts, int nverts, const int *tris, int ntris);

@@ -66,8 +66,8 @@ typedef struct pd_mass_props {
 /*
  * Loads "builtin:NAME[:TRIANGLES[:SEED]]" or a file (binary or ASCII STL, Wavefront OBJ). Welds
  * coincident vertices, validates (closed, edge-manifold, consistently oriented, no zero-area
- * triangles, positive volume) and silently flips an inward-oriented mesh. Errors name the file
- * and the defect.
+ * triangles, positive volume, no two triangles crossing: parts may touch, not cut through each
+ * other) and silently flips an inward-oriented mesh or part. Errors name the file and the defect.
  */
 int pd_mesh_open(const char *spec, pd_mesh **out, pd_error *err);
 

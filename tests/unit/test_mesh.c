@@ -13,6 +13,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "grid_box.h"
 #include "mesh_internal.h"
 #include "polydem.h"
 #include "test.h"
@@ -648,6 +649,250 @@ TEST(shells_are_oriented_each)
     CHECK_STR_CONTAINS(err.msg, "lies inside another");
 }
 
+/* ---- parts that cross or touch ------------------------------------------------------------ */
+
+/* Up to four axis-aligned boxes (centres c, half-extents h) as one mesh, each rotated by r (NULL:
+ * none) about the origin. */
+static int boxes(int n, const double c[][3], const double h[][3], double r[3][3], const char *label,
+                 pd_mesh **out, pd_error *err)
+{
+    double v[4 * 8 * 3];
+    int t[4 * 36];
+    for (int b = 0; b < n; b++) {
+        for (int i = 0; i < 8; i++) {
+            double p[3];
+            for (int k = 0; k < 3; k++)
+                p[k] = c[b][k] + ((i >> k & 1) ? h[b][k] : -h[b][k]);
+            for (int k = 0; k < 3; k++)
+                v[3 * (8 * b + i) + k] =
+                    r ? r[k][0] * p[0] + r[k][1] * p[1] + r[k][2] * p[2] : p[k];
+        }
+        for (int i = 0; i < 36; i++)
+            t[36 * b + i] = 8 * b + cube_tris[i];
+    }
+    return pd_mesh_from_arrays(v, 8 * n, t, 12 * n, label, out, err);
+}
+
+/* Two bars crossing like a plus sign, exported as two closed shells without a boolean union: no
+ * corner of either lies inside the other, so the shells' nesting test saw nothing, and the
+ * volume came out 4 + 2.4 = 6.4 instead of the union's 5.8 (the 0.6 where they cross counted
+ * twice). */
+TEST(crossing_parts_refused)
+{
+    const double c[2][3] = {{0, 0, 0}, {0, 0, 0}};
+    const double thin[2][3] = {{2, 0.5, 0.5}, {0.5, 2, 0.3}};
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    CHECK_EQ_INT(PD_EMESH, boxes(2, c, thin, NULL, "bars.stl", &m, &err));
+    CHECK(m == NULL);
+    CHECK_STR_CONTAINS(err.msg, "bars.stl: the surface passes through itself (");
+    CHECK_STR_CONTAINS(err.msg, ")) crosses triangle ");
+    CHECK_STR_CONTAINS(err.msg, "of another closed part: join the parts into one solid (a boolean "
+                                "union) before export");
+    /* flush tops and bottoms: the faces' diagonals still pass through the other bar */
+    const double flush[2][3] = {{2, 0.5, 0.5}, {0.5, 2, 0.5}};
+    CHECK_EQ_INT(PD_EMESH, boxes(2, c, flush, NULL, "flush.stl", &m, &err));
+    CHECK_STR_CONTAINS(err.msg, "flush.stl: the surface passes through itself");
+    /* a copy slid along itself: the two overlap only in shared planes, facing the same way */
+    const double cs[2][3] = {{0, 0, 0}, {0.5, 0, 0}}, hs[2][3] = {{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}};
+    CHECK_EQ_INT(PD_EMESH, boxes(2, cs, hs, NULL, "slid.stl", &m, &err));
+    CHECK_STR_CONTAINS(err.msg, "slid.stl: the surface passes through itself");
+    CHECK_STR_CONTAINS(err.msg, "overlaps (in one plane, facing the same way) triangle");
+    CHECK(m == NULL);
+}
+
+/* A closed surface folded through itself: the centre of a box's top pulled down through its
+ * bottom, one shell whose spike passes through the bottom face. */
+TEST(self_crossing_shell_refused)
+{
+    const double c[3] = {0, 0, 0}, h[3] = {1, 1, 1};
+    double *v;
+    int *t, nv, nt, n = 4;
+    grid_box_arrays(c, h, n, &v, &t, &nv, &nt);
+    /* grid_box_arrays' faces come as -x, +x, -y, +y, -z, +z, each (n+1)^2 corners */
+    v[3 * (5 * (n + 1) * (n + 1) + (n / 2) * (n + 1) + n / 2) + 2] = -3;
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    CHECK_EQ_INT(PD_EMESH, pd_mesh_from_arrays(v, nv, t, nt, "spike.obj", &m, &err));
+    CHECK(m == NULL);
+    CHECK_STR_CONTAINS(err.msg, "spike.obj: the surface passes through itself (");
+    CHECK_STR_CONTAINS(err.msg, "of the same closed surface: repair the mesh");
+    /* pulled down only halfway it is a dent, not a crossing */
+    v[3 * (5 * (n + 1) * (n + 1) + (n / 2) * (n + 1) + n / 2) + 2] = 0;
+    if (pd_mesh_from_arrays(v, nv, t, nt, "dent.obj", &m, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (m) CHECK(props(m).volume < 8);
+    pd_mesh_destroy(m);
+    free(v);
+    free(t);
+}
+
+/* The cube [-1, 1]^3 and an octahedron of radius 0.2 about (1, 0.2, -0.3), on the cube's +x face
+ * (inside one of its triangles); whole, or only its +x half (a pyramid on the face). */
+static int cube_and_octahedron(int half, pd_mesh **out, pd_error *err)
+{
+    double v[14 * 3], r = 0.2, o[3] = {1, 0.2, -0.3};
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++)
+            v[3 * i + k] = (i >> k & 1) ? 1 : -1;
+    /* 8, 9, 10, 11: the equator (+y, +z, -y, -z) on the face; 12: +x apex; 13: -x apex */
+    const double d[6][3] = {{0, r, 0}, {0, 0, r}, {0, -r, 0}, {0, 0, -r}, {r, 0, 0}, {-r, 0, 0}};
+    for (int i = 0; i < 6; i++)
+        for (int k = 0; k < 3; k++)
+            v[3 * (8 + i) + k] = o[k] + d[i][k];
+    int t[20 * 3];
+    memcpy(t, cube_tris, sizeof cube_tris);
+    for (int q = 0; q < 4; q++) {
+        int a = 8 + q, b = 8 + (q + 1) % 4, *f = &t[36 + 6 * q];
+        f[0] = 12, f[1] = a, f[2] = b; /* outward: counter-clockwise seen from +x */
+        f[3] = 13, f[4] = b, f[5] = a;
+    }
+    if (half) { /* the -x half replaced by the base, facing -x */
+        int base[6] = {8, 10, 9, 8, 11, 10};
+        for (int q = 0; q < 4; q++)
+            memcpy(&t[36 + 3 * q], &t[36 + 6 * q], 3 * sizeof(int));
+        memcpy(&t[48], base, sizeof base);
+    }
+    return pd_mesh_from_arrays(v, 14, t, half ? 18 : 20, half ? "pyramid.stl" : "octa.stl", out,
+                               err);
+}
+
+/* Parts exactly aligned, as CAD exports them: no edge passes strictly through a face, and an
+ * edge lying on a face decides by the triangles on either side of it. */
+TEST(aligned_crossing_refused)
+{
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    CHECK_EQ_INT(PD_EMESH, cube_and_octahedron(0, &m, &err));
+    CHECK(m == NULL);
+    CHECK_STR_CONTAINS(err.msg, "octa.stl: the surface passes through itself (");
+    CHECK_STR_CONTAINS(err.msg, "of another closed part");
+    /* the pyramid only rests on the face: 8 + 0.08 * 0.2 / 3 (base 2 r^2, height r) */
+    if (cube_and_octahedron(1, &m, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (m) CHECK_NEAR(8 + 0.08 * 0.2 / 3, props(m).volume, 1e-14);
+    pd_mesh_destroy(m);
+}
+
+/* Solids that touch without crossing are still one body, each point enclosed once. */
+TEST(touching_parts_accepted)
+{
+    /* face to face, offset so that each cube's corners rest inside the other's face */
+    const double c[2][3] = {{0, 0, 0}, {0.5, 0.25, 1}},
+                 h[2][3] = {{0.5, 0.5, 0.5}, {0.5, 0.5, 0.5}};
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    if (boxes(2, c, h, NULL, "stack.stl", &m, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (m) {
+        pd_mass_props mp = props(m);
+        CHECK_NEAR(2.0, mp.volume, 1e-15);
+        double g[3] = {0.25, 0.125, 0.5};
+        for (int i = 0; i < 3; i++) {
+            CHECK_NEAR(g[i], mp.centroid[i], 1e-15);
+            /* two unit cubes (1/6 each) moved by d = +-(0.25, 0.125, 0.5): I += 2 (|d|^2 - d d^T)
+             */
+            for (int j = 0; j < 3; j++) {
+                double d2 = g[0] * g[0] + g[1] * g[1] + g[2] * g[2];
+                double e = (i == j) * (2.0 / 6 + 2 * d2) - 2 * g[i] * g[j];
+                CHECK_NEAR(e, mp.inertia[i][j], 1e-14);
+            }
+        }
+    }
+    pd_mesh_destroy(m);
+    m = NULL;
+    /* along part of an edge (no corner shared, so the edges are not welded) */
+    const double ce[2][3] = {{0, 0, 0}, {1, 1, 0.5}};
+    if (boxes(2, ce, h, NULL, "edge.stl", &m, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (m) CHECK_NEAR(2.0, props(m).volume, 1e-15);
+    pd_mesh_destroy(m);
+    m = NULL;
+    /* a hollow cube, the inner shell facing inward, as before */
+    const double hh[2][3] = {{0.5, 0.5, 0.5}, {0.25, 0.25, 0.25}}, c0[2][3] = {{0}, {0}};
+    double v[16 * 3];
+    int t[24 * 3];
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++) {
+            v[3 * i + k] = (i >> k & 1) ? hh[0][k] : -hh[0][k];
+            v[3 * (8 + i) + k] = c0[1][k] + ((i >> k & 1) ? hh[1][k] : -hh[1][k]);
+        }
+    for (int i = 0; i < 36; i++) {
+        t[i] = cube_tris[i];
+        t[36 + i] = 8 + cube_tris[i - i % 3 + (3 - i % 3) % 3]; /* reversed */
+    }
+    if (pd_mesh_from_arrays(v, 16, t, 24, "hollow.stl", &m, &err) != PD_OK)
+        TEST_FAILF("%s", err.msg);
+    if (m) CHECK_NEAR(0.875, props(m).volume, 1e-15);
+    pd_mesh_destroy(m);
+    m = NULL;
+
+    /* a bar laid across the cube's edge at 45 degrees: its edge crosses the cube's edge (passing
+     * through both of the cube's face planes) and its face holds a piece of that edge, but
+     * nothing enters the cube; volume 1 + (2 * 0.5) * 0.25^2 */
+    const double r2 = sqrt(0.5);
+    double gv[16 * 3], ax[3][3] = {{r2, 0, -r2}, {0, 1, 0}, {r2, 0, r2}};
+    const double at[3] = {1, 0.5, 1}, ext[3] = {0.5, 0.25, 0.25};
+    int gt[24 * 3];
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++) {
+            gv[3 * i + k] = i >> k & 1;
+            gv[3 * (8 + i) + k] = at[k];
+            for (int j = 0; j < 3; j++) /* bar corners: (+-0.5, 0 or 0.25, 0 or 0.25) */
+                gv[3 * (8 + i) + k] += ax[j][k] * (j == 0 ? ((i & 1) ? ext[0] : -ext[0])
+                                                          : ((i >> j & 1) ? ext[j] : 0));
+        }
+    for (int i = 0; i < 36; i++) {
+        gt[i] = cube_tris[i];
+        gt[36 + i] = 8 + cube_tris[i];
+    }
+    if (pd_mesh_from_arrays(gv, 16, gt, 24, "graze.stl", &m, &err) != PD_OK)
+        TEST_FAILF("%s", err.msg);
+    if (m) CHECK_NEAR(1.0625, props(m).volume, 1e-15);
+    pd_mesh_destroy(m);
+    m = NULL;
+
+    /* the stack rotated and stored as float32 (binary STL): the faces that touched now cross
+     * or part by ~1e-7, within the tolerance (1e-6 of the coordinates' scale) */
+    double q[4] = {0.9, 0.2, -0.3, 0.25}, r[3][3];
+    CHECK_EQ_INT(PD_OK, pd_quat_to_matrix(q, r));
+    const double cf[2][3] = {{3, -2, 1}, {3.5, -1.75, 2}};
+    pd_mesh *back = NULL;
+    CHECK_EQ_INT(PD_OK, boxes(2, cf, h, r, "rotated", &m, &err));
+    const char *path = tmp_path("stack.stl");
+    if (m) CHECK_EQ_INT(PD_OK, pd_mesh_write_stl(m, path, &err));
+    if (pd_mesh_load(path, &back, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (back) CHECK_REL(2.0, props(back).volume, 1e-6);
+    pd_mesh_destroy(back);
+    pd_mesh_destroy(m);
+}
+
+/* Large meshes are checked in about O(n log n): a box of 12 * 64^2 = 49 152 triangles, flat
+ * faces with many coplanar neighbours, and the same mesh blown up onto the unit sphere. */
+TEST(large_meshes_load)
+{
+    const double c[3] = {0.25, -0.5, 1}, h[3] = {1, 0.5, 0.25};
+    double *v;
+    int *t, nv, nt;
+    grid_box_arrays(c, h, 64, &v, &t, &nv, &nt);
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    if (pd_mesh_from_arrays(v, nv, t, nt, "grid", &m, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (m) CHECK_NEAR(1.0, props(m).volume, 1e-12);
+    pd_mesh_destroy(m);
+    m = NULL;
+    for (int i = 0; i < nv; i++) {
+        double *p = &v[3 * i], d[3], len = 0;
+        for (int k = 0; k < 3; k++) {
+            d[k] = (p[k] - c[k]) / h[k];
+            len += d[k] * d[k];
+        }
+        for (int k = 0; k < 3; k++)
+            p[k] = d[k] / sqrt(len);
+    }
+    if (pd_mesh_from_arrays(v, nv, t, nt, "ball", &m, &err) != PD_OK) TEST_FAILF("%s", err.msg);
+    if (m) CHECK_REL(4.0 / 3 * PI, props(m).volume, 1e-3);
+    pd_mesh_destroy(m);
+    free(v);
+    free(t);
+}
+
 /* OBJ faces of more than three corners: convex ones fanned as always, others cut into ears (an
  * L-shaped cap used to be fanned over itself), a corner on a straight edge no longer leaves a
  * zero-area triangle, and a UTF-8 byte order mark is skipped. */
@@ -877,6 +1122,11 @@ int main(void)
     RUN(inward_mesh_is_flipped);
     RUN(welding);
     RUN(shells_are_oriented_each);
+    RUN(crossing_parts_refused);
+    RUN(self_crossing_shell_refused);
+    RUN(aligned_crossing_refused);
+    RUN(touching_parts_accepted);
+    RUN(large_meshes_load);
     RUN(obj_polygons_and_bom);
     RUN(needle_inertia);
     RUN(reject_open_mesh);
