@@ -19,6 +19,9 @@
 
 #include "mesh_internal.h"
 
+#define PD_DOUBLE 1
+#include "bvh.h" /* bvh_spread3: the kernels' own Morton bits */
+
 /* Triangles per leaf of the candidate tree. */
 #define CROSS_LEAF 4
 
@@ -272,18 +275,6 @@ static int pair_crosses(const xctx *c, int i, int j, int *a, int *b)
 
 /* ---- candidate pairs ----------------------------------------------------------------------- */
 
-/* Spreads the low 21 bits of x to every third bit. */
-static uint64_t spread3(uint64_t x)
-{
-    x &= 0x1fffff;
-    x = (x | x << 32) & 0x1f00000000ffffull;
-    x = (x | x << 16) & 0x1f0000ff0000ffull;
-    x = (x | x << 8) & 0x100f00f00f00f00full;
-    x = (x | x << 4) & 0x10c30c30c30c30c3ull;
-    x = (x | x << 2) & 0x1249249249249249ull;
-    return x;
-}
-
 typedef struct {
     uint64_t key;
     int tri;
@@ -475,7 +466,7 @@ int mesh_check_crossings(const double *verts, int nverts, const int *tris, int n
         for (int k = 0; k < 3; k++) {
             n[k] /= len;
             double mid = (dmin(p[k], dmin(q[k], r[k])) + dmax(p[k], dmax(q[k], r[k]))) / 2;
-            key |= spread3((uint64_t)((mid - lo[k]) * scale)) << k;
+            key |= bvh_spread3((uint64_t)((mid - lo[k]) * scale)) << k;
         }
         mk[t] = (morton){key, t};
     }

@@ -158,6 +158,35 @@ interrupted_sweep() {
         "$(tail -n +2 "$tmp/int.csv" 2>/dev/null | cut -d, -f3 | tr '\n' ' ' | sed 's/ $//')"
 }
 
+# held_answers_proxy: a blocker job ten times the usual length (what is submitted next stays
+# queued behind it) and a proxy to the daemon that holds every answer 2 s (cutproxy.py DELAY);
+# sets blocker, proxy_pid and proxy_url.
+held_answers_proxy() {
+    jq '{scenario: (.time.duration *= 10), tags: ["blocker"]}' tests/server/long_job.json >"$tmp/blocker.json"
+    blocker=$(api /v1/jobs --data-binary @"$tmp/blocker.json" | jq -r .id)
+    rm -f "$tmp/race.port"
+    python3 -B tests/clients/cutproxy.py "$port" 0 2 >"$tmp/race.port" 2>/dev/null &
+    proxy_pid=$!
+    i=0
+    while [ ! -s "$tmp/race.port" ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
+    proxy_url="http://127.0.0.1:$(cat "$tmp/race.port")"
+}
+
+# in_flight_sweep CMD...: runs a one-point sweep command (through $proxy_url) in the background,
+# its CSV in $tmp/race.csv and its stderr in $tmp/race.err, sends it SIGTERM as soon as the server
+# has the job (its answer still held by the proxy), and stops the proxy; sets rc (the sweep's exit
+# status) and rid (the job).
+in_flight_sweep() {
+    timeout --foreground 60 "$@" --out "$tmp/race.csv" 2>"$tmp/race.err" &
+    race_pid=$!
+    race_sid=$(sweep_started "$tmp/race.err" 1)
+    kill -TERM "$race_pid"
+    wait "$race_pid"
+    rc=$?
+    kill "$proxy_pid" 2>/dev/null
+    rid=$(api "/v1/jobs?tag=$race_sid" | jq -r '.jobs[0].id')
+}
+
 summary() {
     if [ "$failed" -ne 0 ] && [ -s "$tmp/polydemd.log" ]; then
         echo "-- polydemd log (last 15 lines):"

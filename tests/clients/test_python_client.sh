@@ -175,22 +175,10 @@ if start_daemon; then
         "$(api "/v1/jobs?tag=$sid" | jq -r '[.jobs[].status] | join(" ")')"
     # interrupted while the answer to a submission is on its way (a proxy holds every answer
     # 2 s): the server has made the job, the client has not read its id; the row must still
-    # name it, queued (not "unsubmitted"), behind a blocker long enough to keep it queued
-    jq '{scenario: (.time.duration *= 10), tags: ["blocker"]}' tests/server/long_job.json >"$tmp/blocker.json"
-    blocker=$(api /v1/jobs --data-binary @"$tmp/blocker.json" | jq -r .id)
-    python3 -B tests/clients/cutproxy.py "$port" 0 2 >"$tmp/race.port" 2>/dev/null &
-    proxy_pid=$!
-    i=0
-    while [ ! -s "$tmp/race.port" ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
-    timeout --foreground 60 python3 -B "$CLIENT" --server "http://127.0.0.1:$(cat "$tmp/race.port")" \
-        sweep "$tmp/quick.json" --set '/seed=3' --poll 0.3 --out "$tmp/race.csv" 2>"$tmp/race.err" &
-    race_pid=$!
-    rsid=$(sweep_started "$tmp/race.err" 1)
-    kill -TERM "$race_pid"
-    wait "$race_pid"
-    rc=$?
-    kill "$proxy_pid" 2>/dev/null
-    rid=$(api "/v1/jobs?tag=$rsid" | jq -r '.jobs[0].id')
+    # name it, queued (not "unsubmitted")
+    held_answers_proxy
+    in_flight_sweep python3 -B "$CLIENT" --server "$proxy_url" sweep "$tmp/quick.json" --set '/seed=3' \
+        --poll 0.3
     check sweep_interrupted_in_flight_row "143 $rid queued" \
         "$rc $(tail -n +2 "$tmp/race.csv" 2>/dev/null | cut -d, -f1,3 | tr , ' ')"
     api "/v1/jobs/$rid/cancel" -o /dev/null -X POST

@@ -128,22 +128,8 @@ if start_daemon; then
     # interrupted while the answer to a submission is on its way (a proxy holds every answer 2 s):
     # the server has made the job but the sweep has not read its id; the row must still say
     # queued (not unsubmitted) and the cancel command must name the job, which would run on
-    # (behind a blocker ten times the usual length, so that the swept job stays queued)
-    jq '{scenario: (.time.duration *= 10), tags: ["blocker"]}' tests/server/long_job.json >"$tmp/blocker.json"
-    blocker=$(api /v1/jobs --data-binary @"$tmp/blocker.json" | jq -r .id)
-    python3 -B tests/clients/cutproxy.py "$port" 0 2 >"$tmp/race.port" 2>/dev/null &
-    proxy_pid=$!
-    i=0
-    while [ ! -s "$tmp/race.port" ] && [ $i -lt 50 ]; do sleep 0.1; i=$((i + 1)); done
-    timeout --foreground 60 bash "$SWEEP" --server "http://127.0.0.1:$(cat "$tmp/race.port")" \
-        "$tmp/quick.json" --set '/seed=3' --poll 0.3 --out "$tmp/race.csv" 2>"$tmp/race.err" &
-    race_pid=$!
-    sid=$(sweep_started "$tmp/race.err" 1)
-    kill -TERM "$race_pid"
-    wait "$race_pid"
-    rc=$?
-    kill "$proxy_pid" 2>/dev/null
-    rid=$(api "/v1/jobs?tag=$sid" | jq -r '.jobs[0].id')
+    held_answers_proxy
+    in_flight_sweep bash "$SWEEP" --server "$proxy_url" "$tmp/quick.json" --set '/seed=3' --poll 0.3
     check interrupted_in_flight_row "143 $rid queued" \
         "$rc $(tail -n +2 "$tmp/race.csv" 2>/dev/null | cut -d, -f1,3 | tr , ' ')"
     check interrupted_in_flight_cancel_names_it true \
