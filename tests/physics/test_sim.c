@@ -1494,6 +1494,54 @@ TEST(moving_wall_pushes_sphere)
     finish(&r);
 }
 
+/*
+ * A turning wall: a cube resting on a table that turns at W about z (through the origin), with
+ * friction enough to hold it (mu g = 4.9 m/s^2 against the W^2 r = 0.4 m/s^2 it needs), is carried
+ * round with it once it has caught up: its centre moves at W r, across the radius. The table's
+ * surface moves at W x r, so this checks the wall's contact velocity. Tolerance 1 %: the
+ * tangential spring that holds the cube gives a little (a creep of ~2e-3 of the speed was
+ * measured) and the spin-up takes ~0.05 s of the 0.3 s. (The cube's own spin about z is not
+ * checked: the volumetric model acts at one contact point, the overlap's centroid, nearly under
+ * the cube's centre, so nothing resists a turn about the normal, thesis chapter 4; it ended at
+ * 1.05 rad/s, not the table's 2.)
+ */
+TEST(cube_rides_a_turntable)
+{
+    const double W = 2, r0 = 0.1, d = 0.02, a = d * cbrt(PI / 6); /* a: the cube's side */
+    char json[1500];
+    snprintf(json, sizeof json,
+             "{\"name\": \"turntable\", \"time\": {\"dt\": 1e-5, \"duration\": 1, "
+             "\"output_interval\": 1},"
+             " \"materials\": {\"m\": {\"density\": 2500, \"youngs_modulus\": 1e7}},"
+             " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": 0.5, \"damping\": "
+             "0.5}],"
+             " \"shapes\": {\"c\": {\"builtin\": \"cube\"}},"
+             " \"particles\": [{\"shape\": \"c\", \"material\": \"m\", \"list\": ["
+             " {\"position\": [%g, 0, %.9g], \"size\": %g}]}],"
+             " \"walls\": [{\"name\": \"table\", \"material\": \"m\", \"angular_velocity\": [0, 0, "
+             "%g], \"box\": {\"min\": [-0.3, -0.3, -0.02], \"max\": [0.3, 0.3, 0]}}]}",
+             r0, 0.5 * a - 1e-6, d, W);
+    run r;
+    if (start(&r, json)) return;
+    for (int i = 0; i < 30000; i++)
+        if (step(&r)) break;
+    double x[3], v[3];
+    get(&r, r.m->x, 3, x);
+    get(&r, r.m->v, 3, v);
+    double rad = hypot(x[0], x[1]), speed = hypot(v[0], v[1]);
+    double along = (x[0] * v[0] + x[1] * v[1]) / rad; /* radial velocity */
+    double turn = atan2(x[1], x[0]);                  /* how far round it has gone */
+    printf("  at r = %.5f m: speed %.5f m/s (W r = %.5f), radial %.2e m/s, turned %.4f rad "
+           "(the table %.4f)\n",
+           rad, speed, W * rad, along, turn, W * 0.3);
+    CHECK_NEAR(W * rad, speed, 0.01 * W * rad);
+    CHECK_NEAR(0, along, 0.01 * W * rad);
+    CHECK_NEAR(r0, rad, 0.01 * r0);
+    /* behind the table by what the spin-up lost, less than its first 0.05 s of turning */
+    CHECK(turn < W * 0.3 && turn > W * 0.25);
+    finish(&r);
+}
+
 int main(void)
 {
     pd_error err = {0};
@@ -1512,6 +1560,7 @@ int main(void)
     RUN(particle_inside_wall_is_refused);
     RUN(stokes_drag_relaxation);
     RUN(moving_wall_pushes_sphere);
+    RUN(cube_rides_a_turntable);
     RUN(cohesion_stickiness_threshold);
     RUN(icosphere_collision_like_hertz_sphere);
     RUN(energy_is_conserved_without_damping);
