@@ -76,6 +76,7 @@ struct rh5_writer {
     int mesh_nv, mesh_nt; /* world-space mesh totals; 0 without RH5_SHAPE_MESHES */
     double *world;        /* 3*mesh_nv scratch */
     double *wall_world;   /* 3 * (the most vertices of a moving wall) scratch */
+    int wall_size;        /* length of /xdmf/wall_size: the most vertices of a wall */
     rh5_ext fr[NFRAME_DS], st[NSTATS_DS], stage[RH5_NSTAGES];
     long long nframes, nstats;
     double *times; /* frame times, for the XDMF file */
@@ -538,6 +539,26 @@ done:
     return rc;
 }
 
+/*
+ * /xdmf/wall_size: zeros, as many as the largest wall has vertices. The XDMF file gives every
+ * wall's points the particles' "size" attribute from it, so that ParaView's Glyph scaled by size
+ * over a whole frame (a multiblock of particles and walls) draws nothing at the walls' corners
+ * (without it, glyphs of the default scale sat on every corner).
+ */
+static int setup_wall_size(rh5_writer *w, pd_error *err)
+{
+    int most = 0;
+    for (int i = 0; i < w->nwalls; i++)
+        most = w->walls[i].nv > most ? w->walls[i].nv : most;
+    if (most == 0) return PD_OK;
+    double *z = calloc((size_t)most, sizeof *z);
+    if (!z) return pd_error_set(err, PD_ENOMEM, "%s: out of memory", w->path);
+    int rc = put_data(w, "/xdmf/wall_size", H5T_NATIVE_DOUBLE, (hsize_t)most, 0, z, "m", NULL, err);
+    free(z);
+    w->wall_size = most;
+    return rc;
+}
+
 /* Creates the empty /frames and /stats datasets. */
 static int setup_series(rh5_writer *w, pd_error *err)
 {
@@ -646,6 +667,7 @@ int rh5_set_particles(rh5_writer *w, int n, const int *shape, const int *materia
     if (!rc)
         rc = put_data(w, "/xdmf/particle_id", H5T_NATIVE_INT, (hsize_t)n, 0, ids, "", NULL, err);
     if (!rc && (w->fields & RH5_SHAPE_MESHES)) rc = setup_meshes(w, err);
+    if (!rc) rc = setup_wall_size(w, err);
     if (!rc) rc = setup_series(w, err);
     if (!rc && H5Fflush(w->file, H5F_SCOPE_LOCAL) < 0) rc = h5fail(w, err, "cannot flush");
     if (rc != PD_OK) w->broken = 1;
@@ -1192,8 +1214,8 @@ int rh5_finish(rh5_writer *w, const char *status, const char *message, pd_error 
         for (int i = 0; xw && i < w->nwalls; i++)
             xw[i] = (rh5_xdmf_wall){w->walls[i].name, w->walls[i].nv, w->walls[i].nt,
                                     w->walls[i].moving};
-        rh5_xdmf x = {w->base,  w->path,    w->n,       w->fields, w->nframes,
-                      w->times, w->mesh_nv, w->mesh_nt, w->nwalls, xw};
+        rh5_xdmf x = {w->base,    w->path,    w->n,      w->fields, w->nframes,  w->times,
+                      w->mesh_nv, w->mesh_nt, w->nwalls, xw,        w->wall_size};
         xrc = xw ? rh5_write_xdmf(xtmp, &x, &xerr)
                  : pd_error_set(&xerr, PD_ENOMEM, "%s: out of memory", w->path);
         free(xw);

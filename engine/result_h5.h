@@ -32,9 +32,11 @@
  *                   (pd_wall_rotation: zeros for a fixed wall); a wall that moves also has
  *                   frame_vertices (F,nv,3) [m], its vertices at each frame's time
  *   /xdmf/          additions for the XDMF file: particle_id (N) int32 = 0..N-1 (the Polyvertex
- *                   connectivity); with RH5_SHAPE_MESHES also vertices (F,V,3) [m], every
- *                   particle's mesh in world coordinates per frame, triangles (T,3) int32 into
- *                   those V vertices, and particle (T) int32, the particle of each triangle
+ *                   connectivity); with walls, wall_size (V) zeros [m], V the most vertices of a
+ *                   wall (the walls' "size" in the XDMF file, so a Glyph by size skips them); with
+ * RH5_SHAPE_MESHES also vertices (F,V,3) [m], every particle's mesh in world coordinates per frame,
+ * triangles (T,3) int32 into those V vertices, and particle (T) int32, the particle of each
+ * triangle
  *
  * Shape vertices are for size 1: a particle's body-frame mesh is its shape's vertices times its
  * size (m), so shape vertices and volumes are dimensionless ("1"). Every dataset has a "units"
@@ -177,6 +179,7 @@ typedef struct rh5_xdmf {
     int mesh_nv, mesh_nt; /* /xdmf/vertices and /xdmf/triangles sizes; 0 when not stored */
     int nwalls;
     const rh5_xdmf_wall *walls;
+    int wall_size; /* length of /xdmf/wall_size (zeros: the walls' "size" attribute) */
 } rh5_xdmf;
 
 /*
@@ -186,8 +189,9 @@ typedef struct rh5_xdmf {
  * written), particle_id, shape, material, size and mass. With shape meshes or walls, each frame
  * is a spatial collection of that grid, a Triangle grid "shapes" of /xdmf/vertices frame k with
  * the cell attribute particle_id, and a Triangle grid per wall, named after it, where it is at
- * that frame. Frames are selected with Xdmf 3's "file:dataset|start:stride:count:
- * dataspace" syntax: read by ParaView's Xdmf3 readers, not by the legacy "XDMF Reader".
+ * that frame, with a point attribute size of zeros (/xdmf/wall_size). Frames are selected with Xdmf
+ * 3's "file:dataset|start:stride:count: dataspace" syntax: read by ParaView's Xdmf3 readers, not by
+ * the legacy "XDMF Reader".
  */
 int rh5_write_xdmf(const char *xpath, const rh5_xdmf *x, pd_error *err);
 

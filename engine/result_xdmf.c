@@ -155,7 +155,13 @@ static void xwall(const rh5_xdmf *x, FILE *f, const char *ind, const char *h5, l
         snprintf(ds, sizeof ds, "/walls/%s/vertices", name);
         xitem(f, in2, h5, ds, wl->nv, 3, 0);
     }
-    fprintf(f, "%s</Geometry>\n%s</Grid>\n", in1, ind);
+    fprintf(f, "%s</Geometry>\n", in1);
+    xattr_open(f, in1, "size", "Scalar", "Node");
+    fprintf(f,
+            "%s<DataItem Dimensions=\"%d\" NumberType=\"Float\" Precision=\"8\" "
+            "Format=\"HDF\">%s:/xdmf/wall_size|0:1:%d:%d</DataItem>\n",
+            in2, wl->nv, h5, wl->nv, x->wall_size);
+    fprintf(f, "%s</Attribute>\n%s</Grid>\n", in1, ind);
 }
 
 static void free_names(char **names, int n)

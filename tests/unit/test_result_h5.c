@@ -466,8 +466,8 @@ TEST(roundtrip_hdf5)
     units_count u = {0};
     CHECK(H5Lvisit(f, H5_INDEX_NAME, H5_ITER_INC, check_units_cb, &u) >= 0);
     /* 4 shapes; the walls' 2 meshes and 3 motions each, and the lid's frame_vertices; 4 particles,
-     * 4 xdmf, 6 frames, 14 stats */
-    CHECK_EQ_INT(43, u.datasets);
+     * 5 xdmf (wall_size), 6 frames, 14 stats */
+    CHECK_EQ_INT(44, u.datasets);
     CHECK_EQ_INT(0, u.missing);
     if (u.missing) printf("  first dataset without units: %s\n", u.first_missing);
     static const char *const units[][2] = {{"/frames/position", "m"},
@@ -547,6 +547,9 @@ TEST(xdmf_file)
     CHECK_EQ_INT(6, count_of(x, "TopologyType=\"Triangle\" NumberOfElements=\"2\""));
     CHECK_EQ_INT(3, count_of(x, ">out.h5:/walls/floor/vertices</DataItem>"));
     CHECK_EQ_INT(3, count_of(x, ">out.h5:/walls/lid &lt;&amp;&quot;&gt;/triangles</DataItem>"));
+    /* each wall's points carry a zero size (a Glyph by size over the frame skips them) */
+    CHECK_EQ_INT(6, count_of(x, "<DataItem Dimensions=\"4\" NumberType=\"Float\" Precision=\"8\" "
+                                "Format=\"HDF\">out.h5:/xdmf/wall_size|0:1:4:4</DataItem>"));
     CHECK_STR_CONTAINS(x, "<DataItem Dimensions=\"4 3\" NumberType=\"Float\" Precision=\"8\" "
                           "Format=\"HDF\">out.h5:/walls/lid &lt;&amp;&quot;&gt;/frame_vertices|1 0 "
                           "0:1 1 1:1 4 3:3 4 3</DataItem>");
