@@ -86,7 +86,7 @@ static int write_ints(sim *m, cl_mem b, size_t cnt, const int *in, pd_error *err
     return e == CL_SUCCESS ? PD_OK : CL_FAIL(err, "clEnqueueWriteBuffer", e);
 }
 
-/* Quaternion of a rotation vector (rad). */
+/* v turned by the quaternion q. */
 static void rotate(const double q[4], const double v[3], double out[3])
 {
     double r[3][3];
