@@ -514,6 +514,9 @@ static void on_log(void *cls, const char *fmt, va_list ap)
     if (strstr(line, "closed by remote peer") || strstr(line, "no longer available for sending") ||
         strstr(line, "Request malformed"))
         return;
+    /* the address is handed over whole (MHD_OPTION_SOCK_ADDR), so MHD's own bind error names
+     * "port 0"; the caller reports the address and why ("cannot listen on ...") */
+    if (strstr(line, "Failed to bind to port")) return;
     fprintf(stderr, "polydemd: http: %s\n", line);
 }
 

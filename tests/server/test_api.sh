@@ -308,6 +308,10 @@ check idempotent_retry_when_full "200 $idem" "$code $(jstr id)"
 # ---- a second daemon on the same data is refused; SIGTERM; a restart finds the jobs
 "$POLYDEMD_BIN" --listen 127.0.0.1:0 --data "$tmp/data" --device 99 >"$tmp/second.log" 2>&1
 check second_daemon_refused "1 locked" "$? $(grep -o 'locked' "$tmp/second.log")"
+# its address taken (the first daemon's): exit 1 naming the address, not MHD's "port 0"
+"$POLYDEMD_BIN" --listen "127.0.0.1:$port" --data "$tmp/other" --device 99 >"$tmp/taken.log" 2>&1
+check address_taken "1 127.0.0.1:$port 0" \
+    "$? $(grep -o "cannot listen on '[^']*'" "$tmp/taken.log" | cut -d"'" -f2) $(grep -c 'port 0' "$tmp/taken.log")"
 # event streams open at SIGTERM end cleanly (curl exit 0), not cut off (18) by the stop
 sse_pids=""
 for k in 1 2 3 4 5 6; do
