@@ -158,22 +158,6 @@ int sim_walls_at(sim *m, double t, pd_error *err)
 {
     int W = m->nwall;
     if (W == 0) return PD_OK;
-    if (!m->wall_lbox) {
-        if (!(m->wall_lbox = malloc(sizeof(double) * 6 * W)))
-            return pd_error_set(err, PD_ENOMEM, "run: out of memory");
-        for (int i = 0; i < W; i++) {
-            double *lb = m->wall_lbox + 6 * i;
-            for (int k = 0; k < 3; k++) {
-                lb[k] = INFINITY;
-                lb[3 + k] = -INFINITY;
-            }
-            for (int j = m->wall_voff[i]; j < m->wall_voff[i + 1]; j++)
-                for (int k = 0; k < 3; k++) {
-                    lb[k] = fmin(lb[k], m->wall_local[3 * j + k]);
-                    lb[3 + k] = fmax(lb[3 + k], m->wall_local[3 * j + k]);
-                }
-        }
-    }
     double *x = malloc(sizeof(double) * 3 * W), *q = malloc(sizeof(double) * 4 * W);
     double *v = malloc(sizeof(double) * 3 * W), *w = malloc(sizeof(double) * 3 * W);
     double *box = malloc(sizeof(double) * 6 * W);
@@ -362,7 +346,10 @@ static int upload_shapes(sim *m, pd_error *err)
     m->wall_local = malloc(sizeof(double) * 3 * ((size_t)voff[ns] - voff[s->nshape] + 1));
     m->wall_voff = calloc((size_t)s->nwall + 1, sizeof(int));
     m->wall_c0 = calloc(3 * (size_t)s->nwall + 1, sizeof(double));
-    if (!vert || !tri || !vt_off || !vt || !m->wall_local || !m->wall_voff || !m->wall_c0) goto oom;
+    m->wall_lbox = malloc(sizeof(double) * (6 * (size_t)s->nwall + 1));
+    if (!vert || !tri || !vt_off || !vt || !m->wall_local || !m->wall_voff || !m->wall_c0 ||
+        !m->wall_lbox)
+        goto oom;
     for (int i = 0; i < ns; i++) {
         const pd_mesh *me = mesh[i];
         if (kind[i]) {
@@ -377,12 +364,20 @@ static int upload_shapes(sim *m, pd_error *err)
             memcpy(c, mp.centroid, sizeof c);
             memcpy(m->wall_c0 + 3 * wi, c, sizeof c);
             m->wall_voff[wi + 1] = m->wall_voff[wi] + me->nverts;
+            for (int k = 0; k < 3; k++) {
+                m->wall_lbox[6 * wi + k] = INFINITY;
+                m->wall_lbox[6 * wi + 3 + k] = -INFINITY;
+            }
         }
         for (int j = 0; j < me->nverts; j++)
             for (int k = 0; k < 3; k++) {
                 double p = me->verts[3 * j + k] - c[k];
                 vert[3 * (voff[i] + j) + k] = p;
-                if (i >= s->nshape) m->wall_local[3 * (m->wall_voff[i - s->nshape] + j) + k] = p;
+                if (i < s->nshape) continue;
+                double *lb = m->wall_lbox + 6 * (i - s->nshape);
+                m->wall_local[3 * (m->wall_voff[i - s->nshape] + j) + k] = p;
+                lb[k] = fmin(lb[k], p);
+                lb[3 + k] = fmax(lb[3 + k], p);
             }
         memcpy(tri + 3 * toff[i], me->tris, sizeof(int) * 3 * me->ntris);
         int *off, *list;
