@@ -14,6 +14,8 @@
 #include "integrate.h"       /* the kinetic energy, as rows summed it on the host */
 #include "sim.h"
 #include "grid_box.h"
+#define TEST_RANDOM_SEED 20261202
+#include "test_random.h"
 #include "test.h"
 #include "u_shape.h"
 
@@ -1462,6 +1464,209 @@ TEST(rotating_impact_matches_host_reference)
 }
 
 /*
+ * Momentum conservation: free particles (no gravity, walls or fluid) colliding with friction,
+ * damping and, for spheres, cohesion. Every contact force acts on its two particles equal and
+ * opposite at one point, so the total linear momentum sum m v and the total angular momentum
+ * about the origin, sum (x cross m v + L), are constant however much energy the contacts
+ * dissipate; velocity Verlet keeps both exactly (a drift leaves x cross m v unchanged, and the
+ * half-kicks add sum (x_i cross f_i + t_i) dt / 2 = sum over contacts (c cross F - c cross F)).
+ * A torque taken about a point other than the force's, a tangential force applied to one side
+ * only, or a force gathered twice would show at once (the contacts' impulses are ~1e-3 of
+ * the momenta's scale at least). What is left is rounding: each step rounds every velocity and
+ * angular momentum to ~1e-16 of its value, so over ~1e5 particle-steps the sums drift by at most
+ * ~1e-11 of their scale; 1e-9 leaves a hundredfold margin.
+ */
+#define MC_N 24
+static void momentum_is_conserved(const char *label, const char *materials, const char *shapes,
+                                  const char *const *shape_names, int nshapes, const char *walls,
+                                  int nsteps)
+{
+    /* a cloud converging on the origin, each particle spinning (in a box: bursting towards the
+     * walls, then coming back from them) */
+    const double vr = walls ? 150 : -150;
+    char parts[MC_N * 400 + 800] = "", json[sizeof parts + 2000];
+    size_t len = 0;
+    for (int g = 0; g < nshapes; g++) {
+        len += (size_t)snprintf(parts + len, sizeof parts - len,
+                                "%s{\"shape\": \"%s\", \"material\": \"m\", \"list\": [",
+                                g ? ", " : "", shape_names[g]);
+        for (int i = g; i < MC_N; i += nshapes) {
+            /* on a jittered 3 x 3 x 3 lattice of pitch 0.016 m (less its centre), sizes 8-12 mm */
+            int c = i + (i >= 13);
+            double x[3] = {0.016 * (c % 3 - 1) + 0.002 * (rnd() - 0.5),
+                           0.016 * (c / 3 % 3 - 1) + 0.002 * (rnd() - 0.5),
+                           0.016 * (c / 9 - 1) + 0.002 * (rnd() - 0.5)},
+                   q[4], w[3], s = 0.008 + 0.004 * rnd();
+            rnd_quat(q);
+            for (int k = 0; k < 3; k++)
+                w[k] = 200 * (rnd() - 0.5);
+            len += (size_t)snprintf(
+                parts + len, sizeof parts - len,
+                "%s{\"position\": [%.17g, %.17g, %.17g], \"orientation\": [%.17g, %.17g, %.17g, "
+                "%.17g], \"velocity\": [%.17g, %.17g, %.17g], \"angular_velocity\": [%.17g, "
+                "%.17g, %.17g], \"size\": %.17g}",
+                i >= nshapes ? ", " : "", x[0], x[1], x[2], q[0], q[1], q[2], q[3],
+                vr * x[0] + 0.3 * (rnd() - 0.5), vr * x[1] + 0.3 * (rnd() - 0.5),
+                vr * x[2] + 0.3 * (rnd() - 0.5), w[0], w[1], w[2], s);
+        }
+        len += (size_t)snprintf(parts + len, sizeof parts - len, "]}");
+    }
+    const double dt = 2e-6, g = walls ? -9.81 : 0;
+    snprintf(json, sizeof json,
+             "{\"name\": \"momentum\", \"time\": {\"dt\": %g, \"duration\": 1, "
+             "\"output_interval\": 1}, \"gravity\": [0, 0, %g], %s,"
+             " \"shapes\": {%s}, \"particles\": [%s]%s%s}",
+             dt, g, materials, shapes, parts, walls ? ", \"walls\": " : "", walls ? walls : "");
+    run r;
+    if (start(&r, json)) return;
+    int n = r.m->p->n;
+    double mass[MC_N];
+    memcpy(mass, r.m->p->mass, sizeof mass);
+    double P0[3], L0[3], P[3], L[3], scale_p = 0, scale_l = 0, total_m = 0;
+    /* with walls: the impulse the particles gave the walls, by the trapezoid rule that velocity
+     * Verlet's two half-kicks make of the forces at the step's two ends, and its scale */
+    double wf[2][3 * 6] = {{0}}, J[3] = {0, 0, 0}, scale_j = 0;
+    int nw = r.m->nwall, touching_steps = 0, most = 0;
+    for (int p = 0; p < n; p++)
+        total_m += mass[p];
+    for (int i = 0; i <= nsteps; i++) {
+        if (i > 0 && step(&r)) break;
+        if (nw > 0) {
+            long contacts;
+            double ratio, *now = wf[i % 2], *before = wf[(i + 1) % 2];
+            pd_error err = {0};
+            if (nw > 6 || sim_stats_contacts(r.m, &contacts, &ratio, now, &err) != PD_OK) {
+                TEST_FAILF("wall forces: %s", nw > 6 ? "more than 6 walls" : err.msg);
+                break;
+            }
+            for (int w = 0; i > 0 && w < nw; w++)
+                for (int k = 0; k < 3; k++) {
+                    J[k] += 0.5 * dt * (before[3 * w + k] + now[3 * w + k]);
+                    scale_j += 0.5 * dt * (fabs(before[3 * w + k]) + fabs(now[3 * w + k]));
+                }
+        }
+        if (i % 50 == 0 && r.m->npairs > 0) {
+            double info[4096];
+            int np = r.m->npairs < 4096 ? r.m->npairs : 4096, touching = 0;
+            get_info(&r, (size_t)np, info);
+            for (int c = 0; c < np; c++)
+                touching += info[c] >= 0;
+            touching_steps += touching > 0;
+            most = touching > most ? touching : most;
+        }
+        if (i != 0 && i != nsteps) continue;
+        double x[3 * MC_N], v[3 * MC_N], Lb[3 * MC_N];
+        get(&r, r.m->x, 3 * (size_t)n, x);
+        get(&r, r.m->v, 3 * (size_t)n, v);
+        get(&r, r.m->L, 3 * (size_t)n, Lb);
+        double *pp = i ? P : P0, *ll = i ? L : L0;
+        for (int k = 0; k < 3; k++)
+            pp[k] = ll[k] = 0;
+        for (int p = 0; p < n; p++) {
+            double mv[3] = {mass[p] * v[3 * p], mass[p] * v[3 * p + 1], mass[p] * v[3 * p + 2]},
+                   *xp = x + 3 * p;
+            double xl[3] = {xp[1] * mv[2] - xp[2] * mv[1], xp[2] * mv[0] - xp[0] * mv[2],
+                            xp[0] * mv[1] - xp[1] * mv[0]};
+            for (int k = 0; k < 3; k++) {
+                pp[k] += mv[k];
+                ll[k] += xl[k] + Lb[3 * p + k];
+            }
+            if (i == 0) {
+                scale_p += sqrt(mv[0] * mv[0] + mv[1] * mv[1] + mv[2] * mv[2]);
+                scale_l += sqrt(xl[0] * xl[0] + xl[1] * xl[1] + xl[2] * xl[2]) +
+                           sqrt(Lb[3 * p] * Lb[3 * p] + Lb[3 * p + 1] * Lb[3 * p + 1] +
+                                Lb[3 * p + 2] * Lb[3 * p + 2]);
+            }
+        }
+    }
+    double dp = 0, dl = 0;
+    for (int k = 0; k < 3; k++) {
+        /* the walls took J from the particles, gravity gave them M g t */
+        double expect = P0[k] - J[k] + (k == 2 ? total_m * g * dt * nsteps : 0);
+        dp = fmax(dp, fabs(P[k] - expect));
+        dl = fmax(dl, fabs(L[k] - L0[k]));
+    }
+    scale_p += scale_j + total_m * fabs(g) * dt * nsteps;
+    printf("  %s: %d particles, %d steps, contacts seen in %d of %d samples (at most %d at once); "
+           "momentum drift %.2e of sum |m v| = %.4g kg m/s, angular momentum drift %.2e of %.4g "
+           "kg m^2/s\n",
+           label, n, nsteps, touching_steps, nsteps / 50 + 1, most, dp / scale_p, scale_p,
+           dl / scale_l, scale_l);
+    CHECK(touching_steps >= 10 && most >= 10); /* the cloud did collide, in many pairs at once */
+    CHECK(dp <= 1e-9 * scale_p);
+    if (nw > 0) { /* the walls pushed hard enough to count, and their torques are not checked */
+        printf("  the walls took %.4g kg m/s (sum of |F| dt %.4g), gravity gave %.4g\n",
+               sqrt(J[0] * J[0] + J[1] * J[1] + J[2] * J[2]), scale_j,
+               total_m * fabs(g) * dt * nsteps);
+        CHECK(scale_j > 0.1 * scale_p);
+    } else {
+        CHECK(dl <= 1e-9 * scale_l);
+    }
+    finish(&r);
+}
+
+TEST(momentum_is_conserved_by_polyhedra)
+{
+    static const char *const names[] = {"s", "r", "i"};
+    momentum_is_conserved(
+        "Schonhardt prisms, rocks, icospheres; friction 0.5, damping 0.3",
+        "\"materials\": {\"m\": {\"density\": 2600, \"youngs_modulus\": 1e7, \"poisson_ratio\": "
+        "0.25}},"
+        " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": 0.5, \"damping\": 0.3}]",
+        "\"s\": {\"builtin\": \"schonhardt\"}, \"r\": {\"builtin\": \"rock\", \"triangles\": 80}, "
+        "\"i\": {\"builtin\": \"icosphere\", \"triangles\": 80}",
+        names, 3, NULL, 3000);
+}
+
+TEST(momentum_is_conserved_by_spheres)
+{
+    static const char *const names[] = {"b"};
+    momentum_is_conserved(
+        "spheres, linear model with friction 0.5, damping and cohesion",
+        "\"materials\": {\"m\": {\"density\": 2600, \"youngs_modulus\": 1e7, \"poisson_ratio\": "
+        "0.25}},"
+        " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": 0.5, \"model\": "
+        "\"linear\", \"normal_stiffness\": 2e4, \"tangential_stiffness\": 1e4, "
+        "\"damping_coefficient\": 0.5, \"cohesion\": 2e3, \"cohesion_range\": 0.001}]",
+        "\"b\": {\"sphere\": {}}", names, 1, NULL, 3000);
+}
+
+/*
+ * The same cloud inside a closed box, under gravity: the particles' momentum changes by what
+ * gravity gives them less the impulse of the walls' load cells (/stats/wall_force: the force the
+ * particles exert on each wall), so the load cells must read every contact's force with its sign,
+ * on the right wall. Same rounding bound (the impulses add to the scale).
+ */
+TEST(wall_forces_balance_momentum)
+{
+    static const char *const names[] = {"s", "r", "i"};
+    char walls[6][220], all[1400];
+    const double lo = -0.03, hi = 0.03, t = 0.02;
+    for (int w = 0; w < 6; w++) {
+        int a = w / 2;
+        double mn[3] = {lo - t, lo - t, lo - t}, mx[3] = {hi + t, hi + t, hi + t};
+        if (w % 2 == 0)
+            mx[a] = lo;
+        else
+            mn[a] = hi;
+        snprintf(walls[w], sizeof walls[w],
+                 "{\"name\": \"w%d\", \"material\": \"m\", \"box\": {\"min\": [%g, %g, %g], "
+                 "\"max\": [%g, %g, %g]}}",
+                 w, mn[0], mn[1], mn[2], mx[0], mx[1], mx[2]);
+    }
+    snprintf(all, sizeof all, "[%s, %s, %s, %s, %s, %s]", walls[0], walls[1], walls[2], walls[3],
+             walls[4], walls[5]);
+    momentum_is_conserved(
+        "the cloud in a closed box under gravity",
+        "\"materials\": {\"m\": {\"density\": 2600, \"youngs_modulus\": 1e7, \"poisson_ratio\": "
+        "0.25}},"
+        " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": 0.5, \"damping\": 0.3}]",
+        "\"s\": {\"builtin\": \"schonhardt\"}, \"r\": {\"builtin\": \"rock\", \"triangles\": 80}, "
+        "\"i\": {\"builtin\": \"icosphere\", \"triangles\": 80}",
+        names, 3, all, 6000);
+}
+
+/*
  * A moving wall: a box wall advancing at V hits a sphere at rest; with no damping the collision
  * is elastic in the wall's frame, so the sphere leaves at 2 V (the wall's mass is infinite).
  * Hertz resolved with ~100 steps per contact: 1e-3 relative.
@@ -1565,6 +1770,9 @@ int main(void)
     RUN(icosphere_collision_like_hertz_sphere);
     RUN(energy_is_conserved_without_damping);
     RUN(rotating_impact_matches_host_reference);
+    RUN(momentum_is_conserved_by_polyhedra);
+    RUN(momentum_is_conserved_by_spheres);
+    RUN(wall_forces_balance_momentum);
     RUN(bit_identical_reruns);
     RUN(bit_identical_reruns_with_separate_places);
     RUN(pair_list_reuse_is_exact);
