@@ -193,6 +193,80 @@ TEST(sphere_settles_on_a_finely_meshed_floor)
     remove(path);
 }
 
+/*
+ * A sphere on a floor under gravity tilted by theta (an incline), from rest (seed 004's sliding
+ * and rolling kinematics; any mechanics text): with mu >= (2/7) tan theta it rolls without
+ * slipping, its centre accelerating at a = (5/7) g sin theta, with omega = v / R; below that it
+ * slides at a = g (sin theta - mu cos theta) while friction spins it up at 5 mu g cos theta / (2
+ * R). This exercises the tangential spring with rotation: the contact point's velocity v + omega x
+ * r and the friction torque. The accelerations are fitted between t = 0.05 s and 0.2 s, once the
+ * start's normal and tangential oscillations (periods ~9 ms at the resting overlap, damping 0.5)
+ * have died down; 1 % is a few times what their remainder and the spring's elastic stick
+ * displacement (~1e-6 m against 0.05 m travelled) could leave.
+ */
+static void sphere_on_incline(double mu, double *a_out, double *alpha_out, double *slip_out)
+{
+    const double theta = 15 * PI / 180, g = 9.81, R = 0.01, dt = 5e-6, E = 1e7, nu = 0.25;
+    const double rho = 2600, m = rho * 4.0 / 3 * PI * R * R * R;
+    /* start at the resting overlap of Hertz: m g cos theta = 4/3 E* sqrt(R) delta^(3/2) */
+    double es = E / (2 * (1 - nu * nu));
+    double delta = pow(m * g * cos(theta) / (4.0 / 3 * es * sqrt(R)), 2.0 / 3);
+    char json[1500];
+    snprintf(
+        json, sizeof json,
+        "{\"name\": \"incline\", \"allow_unstable_dt\": true,"
+        " \"time\": {\"dt\": %g, \"duration\": 1, \"output_interval\": 1},"
+        " \"gravity\": [%.17g, 0, %.17g],"
+        " \"materials\": {\"m\": {\"density\": %g, \"youngs_modulus\": %g, \"poisson_ratio\": "
+        "%g}},"
+        " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": %g, \"damping\": 0.5}],"
+        " \"shapes\": {\"b\": {\"sphere\": {}}},"
+        " \"particles\": [{\"shape\": \"b\", \"material\": \"m\", \"list\": ["
+        " {\"position\": [0, 0, %.17g], \"size\": %g}]}],"
+        " \"walls\": [{\"name\": \"floor\", \"material\": \"m\", \"box\": {\"min\": [-1, -1, "
+        "-0.1], \"max\": [1, 1, 0]}}]}",
+        dt, g * sin(theta), -g * cos(theta), rho, E, nu, mu, R - delta, 2 * R);
+    run r;
+    *a_out = *alpha_out = *slip_out = NAN;
+    if (start(&r, json)) return;
+    double I = r.m->p->inertia[0], v[2][3], L[2][3];
+    int i1 = (int)(0.05 / dt), i2 = (int)(0.2 / dt);
+    for (int i = 1; i <= i2; i++) {
+        if (step(&r)) break;
+        if (i == i1 || i == i2) {
+            get(&r, r.m->v, 3, v[i == i2]);
+            get(&r, r.m->L, 3, L[i == i2]);
+        }
+    }
+    double t = (i2 - i1) * dt;
+    *a_out = (v[1][0] - v[0][0]) / t;
+    *alpha_out = (L[1][1] - L[0][1]) / I / t;
+    /* slip velocity of the contact point at the end: v - R omega_y */
+    *slip_out = v[1][0] - R * L[1][1] / I;
+    printf("  mu %g: a = %.6g m/s^2, angular acceleration %.6g rad/s^2, slip at 0.2 s %.3g m/s "
+           "(v %.4g m/s)\n",
+           mu, *a_out, *alpha_out, *slip_out, v[1][0]);
+    finish(&r);
+}
+
+TEST(sphere_rolls_or_slides_down_an_incline)
+{
+    const double theta = 15 * PI / 180, g = 9.81, R = 0.01;
+    double a, alpha, slip;
+    /* rolling: mu = 0.3 > (2/7) tan 15 deg = 0.077 */
+    sphere_on_incline(0.3, &a, &alpha, &slip);
+    double want = 5.0 / 7 * g * sin(theta);
+    CHECK_REL(want, a, 0.01);
+    CHECK_REL(want / R, alpha, 0.01);
+    CHECK(fabs(slip) < 0.01 * a * 0.2); /* rolls: no slip beyond 1 % of its speed */
+    /* sliding: mu = 0.05 < 0.077 */
+    double mu = 0.05;
+    sphere_on_incline(mu, &a, &alpha, &slip);
+    CHECK_REL(g * (sin(theta) - mu * cos(theta)), a, 0.01);
+    CHECK_REL(5 * mu * g * cos(theta) / (2 * R), alpha, 0.01);
+    CHECK(slip > 0.1 * a * 0.2); /* still sliding */
+}
+
 /* Cube side for a volume-equivalent diameter d: s^3 = pi d^3 / 6. */
 static double cube_side(double d)
 {
@@ -227,6 +301,67 @@ static double cube_rest_depth(double s, double rho, double estar)
 {
     double m = rho * s * s * s;
     return 3 * sqrt(PI) * m * 9.81 / (4 * estar * s);
+}
+
+/*
+ * A cube resting flat on an incline of 15 degrees (gravity tilted), from rest at its resting
+ * depth: with mu = 0.35 > tan 15 deg = 0.268 static friction holds it, the tangential spring
+ * taking m g sin theta with a stick displacement F / k_t of micrometres (k_t ~ 2/3 of k_n =
+ * 2 E* s here); with mu = 0.2 it slides at a = g (sin theta - mu cos theta), fitted between
+ * 0.05 s and 0.15 s once the start's oscillations (period ~1.4 ms, damping 0.5) have died: 1 %.
+ * The face lies flat on the floor, the coplanar case of the overlap (issue 2) under a
+ * tangential load.
+ */
+static void cube_on_incline(double mu, double *creep, double *a_out)
+{
+    const double theta = 15 * PI / 180, g = 9.81;
+    double s = cube_side(0.02), estar = 1e7 / (2 * (1 - 0.25 * 0.25));
+    double m = 2600 * s * s * s, kn = 2 * estar * s, dt = 2 * PI * sqrt(m / kn) / 50;
+    /* resting depth under the normal component of gravity (cube_rest_depth at g cos theta) */
+    double rest = cube_rest_depth(s, 2600, estar) * cos(theta);
+    char json[1500];
+    snprintf(
+        json, sizeof json,
+        "{\"name\": \"incline\", \"allow_unstable_dt\": true,"
+        " \"time\": {\"dt\": %.17g, \"duration\": 1, \"output_interval\": 1},"
+        " \"gravity\": [%.17g, 0, %.17g],"
+        " \"materials\": {\"m\": {\"density\": 2600, \"youngs_modulus\": 1e7, "
+        "\"poisson_ratio\": 0.25}},"
+        " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": %g, \"damping\": 0.5}],"
+        " \"shapes\": {\"c\": {\"builtin\": \"cube\"}},"
+        " \"particles\": [{\"shape\": \"c\", \"material\": \"m\", \"list\": ["
+        " {\"position\": [0, 0, %.17g], \"size\": 0.02}]}],"
+        " \"walls\": [{\"name\": \"floor\", \"material\": \"m\", \"box\": {\"min\": [-1, -1, "
+        "-0.1], \"max\": [1, 1, 0]}}]}",
+        dt, g * sin(theta), -g * cos(theta), mu, 0.5 * s - rest);
+    run r;
+    *creep = *a_out = NAN;
+    if (start(&r, json)) return;
+    int i1 = (int)(0.05 / dt), i2 = (int)(0.15 / dt);
+    double x[2][3], v[2][3];
+    for (int i = 1; i <= i2; i++) {
+        if (step(&r)) break;
+        if (i == i1 || i == i2) {
+            get(&r, r.m->x, 3, x[i == i2]);
+            get(&r, r.m->v, 3, v[i == i2]);
+        }
+    }
+    *creep = x[1][0] - x[0][0];
+    *a_out = (v[1][0] - v[0][0]) / ((i2 - i1) * dt);
+    printf("  mu %g: moved %.3g m between 0.05 s and 0.15 s (%.3g m in all), a = %.6g m/s^2\n", mu,
+           *creep, x[1][0], *a_out);
+    finish(&r);
+}
+
+TEST(cube_holds_or_slides_on_an_incline)
+{
+    const double theta = 15 * PI / 180, g = 9.81;
+    double creep, a;
+    cube_on_incline(0.35, &creep, &a);
+    /* held: the stick displacement is m g sin theta / k_t ~ 1e-7 m; no creep beyond 1 um */
+    CHECK(fabs(creep) < 1e-6);
+    cube_on_incline(0.2, &creep, &a);
+    CHECK_REL(g * (sin(theta) - 0.2 * cos(theta)), a, 0.01);
 }
 
 /* Issue 3: a cube resting flat on a wall settles at the volumetric model's static balance. The
@@ -1772,6 +1907,8 @@ int main(void)
     RUN(cube_rests_flat_on_wall);
     RUN(u_rests_on_two_separate_places);
     RUN(cube_slides_to_rest);
+    RUN(sphere_rolls_or_slides_down_an_incline);
+    RUN(cube_holds_or_slides_on_an_incline);
     RUN(cube_slides_on_a_finely_meshed_floor);
     RUN(particle_inside_wall_is_refused);
     RUN(stokes_drag_relaxation);
