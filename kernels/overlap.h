@@ -613,7 +613,9 @@ PD_FN void ovl_pass(ovl_ctx *c)
         T.id[1] = ta[3 * t + 1];
         T.id[2] = ta[3 * t + 2];
         T.slot = k;
-        ovl_tri_make(&T, ovl_va(c, T.id[0]), ovl_va(c, T.id[1]), ovl_va(c, T.id[2]), c->pad);
+        /* T's box and U's (cached) are each padded by half the cull margin (OVL_CULL) */
+        ovl_tri_make(&T, ovl_va(c, T.id[0]), ovl_va(c, T.id[1]), ovl_va(c, T.id[2]),
+                     PD_R(OVL_CULL / 2) * c->pad);
         /* B open (a wall's part): A is not filtered, so most of its triangles lie beside all
          * of B's near ones; between particles the box where the kept parts meet did that */
         if (open_b && !ovl_boxes_meet(T.lo, T.hi, c->nblo, c->nbhi)) continue;
@@ -1095,14 +1097,20 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
             scale = pd_max(scale, PD_FABS(p));
         }
     }
-    c->e1 = e1;
-    c->e2 = e2;
-    /* The half-planes are widened by the resolution: B's projections are computed in B's frame,
-     * and a contact that touches to within rounding must reach the symbolic tests. */
-    pd_real pad = OVL_SNAP * scale;
-    c->e1 += pad;
-    c->e2 -= pad;
+    /*
+     * The half-planes are widened by OVL_CULL resolutions (OVL_SNAP L, L the largest coordinate
+     * of the kept parts: known only once they are kept). B's projections are computed in B's
+     * frame, and a contact that touches to within the predicates' ties must reach the symbolic
+     * tests. The first try takes the projections' largest magnitude for L, doubled; where the
+     * kept parts turn out to reach further (elongated shapes across d), the filter is run again
+     * with their L.
+     */
+    pd_real pad = PD_R(2 * OVL_CULL) * OVL_SNAP * scale;
+refilter:
+    c->e1 = e1 + pad;
+    c->e2 = e2 - pad;
     c->pad = pad;
+    c->ka = c->kb = 0;
     /* B open: its local part's lowest vertex does not bound the wall's solid inside A's cube, so
      * A is not filtered (every A triangle kept); B's triangles still must reach below e1 */
     if (open_b) c->e2 = -PD_REAL_MAX;
@@ -1195,6 +1203,10 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     /* L: the largest coordinate magnitude in play */
     pd_real lsc = pd_max(pd_max(v3_amax(alo), v3_amax(ahi)), pd_max(v3_amax(blo), v3_amax(bhi)));
     /* the resolution: coordinates carry about OVL_SNAP * L of rounding from the transforms */
+    if (c->filter && pad < OVL_CULL * OVL_SNAP * lsc) {
+        pad = PD_R(2 * OVL_CULL) * OVL_SNAP * lsc;
+        goto refilter;
+    }
     c->pad = OVL_SNAP * lsc;
 
     /*
@@ -1203,15 +1215,16 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
      * through a kept triangle). So only triangles meeting the intersection of the two boxes can
      * emit cusps, and a vertex outside it is outside the other solid.
      */
-    pd_v3 padv = v3(c->pad, c->pad, c->pad);
+    pd_real cull = OVL_CULL * c->pad;
+    pd_v3 padv = v3(cull, cull, cull);
     c->alo = v3_sub(alo, padv);
     c->ahi = v3_add(ahi, padv);
     c->blo = v3_sub(blo, padv);
     c->bhi = v3_add(bhi, padv);
-    c->box_lo = v3(pd_max(alo.x, blo.x) - c->pad, pd_max(alo.y, blo.y) - c->pad,
-                   pd_max(alo.z, blo.z) - c->pad);
-    c->box_hi = v3(pd_min(ahi.x, bhi.x) + c->pad, pd_min(ahi.y, bhi.y) + c->pad,
-                   pd_min(ahi.z, bhi.z) + c->pad);
+    c->box_lo =
+        v3(pd_max(alo.x, blo.x) - cull, pd_max(alo.y, blo.y) - cull, pd_max(alo.z, blo.z) - cull);
+    c->box_hi =
+        v3(pd_min(ahi.x, bhi.x) + cull, pd_min(ahi.y, bhi.y) + cull, pd_min(ahi.z, bhi.z) + cull);
     if (open_b) { /* the wall's solid reaches beyond its local triangles' box: A's box bounds */
         c->box_lo = c->alo;
         c->box_hi = c->ahi;
@@ -1236,18 +1249,19 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         ovl_tri_make(&U, ovl_vb(c, in->tb[3 * u]), ovl_vb(c, in->tb[3 * u + 1]),
                      ovl_vb(c, in->tb[3 * u + 2]), PD_R(0));
         if (c->filter && !ovl_box_meets(c, &U)) continue;
+        pd_real hpad = PD_R(OVL_CULL / 2) * c->pad;
         if (open_b) {
-            c->nblo = v3(pd_min(c->nblo.x, U.lo.x - c->pad), pd_min(c->nblo.y, U.lo.y - c->pad),
-                         pd_min(c->nblo.z, U.lo.z - c->pad));
-            c->nbhi = v3(pd_max(c->nbhi.x, U.hi.x + c->pad), pd_max(c->nbhi.y, U.hi.y + c->pad),
-                         pd_max(c->nbhi.z, U.hi.z + c->pad));
+            c->nblo = v3(pd_min(c->nblo.x, U.lo.x - hpad), pd_min(c->nblo.y, U.lo.y - hpad),
+                         pd_min(c->nblo.z, U.lo.z - hpad));
+            c->nbhi = v3(pd_max(c->nbhi.x, U.hi.x + hpad), pd_max(c->nbhi.y, U.hi.y + hpad),
+                         pd_max(c->nbhi.z, U.hi.z + hpad));
         }
-        /* cache what the pair loop needs of U, with the box padded by the resolution */
+        /* cache what the pair loop needs of U, with the box padded by half the cull margin */
         ovl_tri_edges(&U);
         PD_GLOBAL pd_real *uc = c->ucache + OVL_TRI_CACHE * c->nb;
         pd_v3 v[6] = {U.nraw,
-                      v3_sub(U.lo, v3(c->pad, c->pad, c->pad)),
-                      v3_add(U.hi, v3(c->pad, c->pad, c->pad)),
+                      v3_sub(U.lo, v3(hpad, hpad, hpad)),
+                      v3_add(U.hi, v3(hpad, hpad, hpad)),
                       U.me[0],
                       U.me[1],
                       U.me[2]};

@@ -269,6 +269,20 @@ PD_FN PD_GLOBAL pd_real *ovl_ndr(const ovl_ctx *c, int k)
  * pose transform and the determinant adds about ten more; 64 ulps leaves a margin. */
 #define OVL_SNAP (PD_R(64) * PD_EPS)
 
+/*
+ * How many resolutions (pad) every culling test gives away: the half-planes of eq. 5.5, the box
+ * where A n B lies, the pair loop's triangle boxes and the casts' ray boxes. A plane predicate
+ * snaps a point within 2 pad of the plane to a tie, which the symbolic displacement then decides
+ * (ovl_plane_tol), so the configuration the predicates describe may differ from the coordinates
+ * by that much; a test that culls by less can drop a corner, a triangle or a crossing that the
+ * predicates count, and the cusps no longer close a surface. With one pad, two equal cubes
+ * stacked face on face with side faces coplanar to within 2e-14 lost a side face (box) or called
+ * a corner outside that the displaced pass put inside: a centroid 394 m off for a 1 m cube, a
+ * third of the volume lost, and in a simulation the cubes thrown apart
+ * (tests/physics/test_overlap.c, stacked_cubes_with_coplanar_sides). Twice the band.
+ */
+#define OVL_CULL 4
+
 PD_FN pd_real ovl_det(pd_v3 a, pd_v3 b, pd_v3 c)
 {
     return v3_dot(a, v3_cross(b, c));
@@ -578,7 +592,7 @@ PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, PD_GLOBAL const int *tri, PD_GLOBA
 {
     pd_v3 r = v3_scale(c->d, sp);
     pd_v3 rlo, rhi;
-    ovl_ray_box(p, r, lo, hi, c->pad, &rlo, &rhi);
+    ovl_ray_box(p, r, lo, hi, OVL_CULL * c->pad, &rlo, &rhi);
     int odd = 0, k0 = 0, k1 = nk;
     if (c->filter && nk >= OVL_STRIP_MIN && !(c->in->flags & OVL_OPEN_B)) {
         if (!s->built) ovl_strip_build(c, s, tri, kept, nk, vx);
@@ -627,7 +641,7 @@ PD_FN int ovl_tree_parity(ovl_ctx *c, const wb_tree *w, const ovl_in *map, pd_v3
     pd_v3 o = pw;
     pd_real ext = pd_max(v3_amax(o), pd_max(v3_amax(v3(root[0], root[1], root[2])),
                                             v3_amax(v3(root[3], root[4], root[5]))));
-    pd_real pad = PD_R(1024) * PD_EPS * ext + c->pad;
+    pd_real pad = PD_R(1024) * PD_EPS * ext + OVL_CULL * c->pad;
     int stack[WB_STACK], sp = 0, odd = 0;
     if (wb_ray_meets(root, o, rw, pad)) stack[sp++] = 0;
     while (sp > 0) {
@@ -688,8 +702,9 @@ PD_FN int ovl_open_inside_b(ovl_ctx *c, pd_v3 p)
     pd_real len = v3_norm(p);
     if (!(len > PD_R(0))) return odd;
     pd_v3 r = v3_scale(p, PD_R(-1) / len), o = v3(0, 0, 0);
-    pd_v3 slo = v3(pd_min(p.x, 0) - c->pad, pd_min(p.y, 0) - c->pad, pd_min(p.z, 0) - c->pad);
-    pd_v3 shi = v3(pd_max(p.x, 0) + c->pad, pd_max(p.y, 0) + c->pad, pd_max(p.z, 0) + c->pad);
+    pd_real m = OVL_CULL * c->pad;
+    pd_v3 slo = v3(pd_min(p.x, 0) - m, pd_min(p.y, 0) - m, pd_min(p.z, 0) - m);
+    pd_v3 shi = v3(pd_max(p.x, 0) + m, pd_max(p.y, 0) + m, pd_max(p.z, 0) + m);
     PD_GLOBAL const int *tri = c->in->tb;
     for (int k = 0; k < c->kb; k++) {
         int t = c->kept_b[k];
@@ -710,7 +725,7 @@ PD_FN int ovl_open_inside_b(ovl_ctx *c, pd_v3 p)
 }
 
 /* Whether vertex v of side (0: A, 1: B) is outside the other solid by the filter alone: beyond
- * the other's half-plane or outside the box where A n B lies. */
+ * the other's half-plane or outside the box where A n B lies (both widened by OVL_CULL pads). */
 PD_FN int ovl_outside_known(const ovl_ctx *c, int side, int v)
 {
     if (!c->filter) return 0;
