@@ -327,6 +327,29 @@ code=$(req GET '/v1/jobs?status=queued&limit=1000')
 check restart_keeps_jobs "200 8" "$code $(jall id | tr , '\n' | wc -l)"
 stop_daemon TERM
 
+# ---- the queue limit holds for submissions side by side: 12 at once, each slow enough to parse
+#      (20 000 listed particles) that the HTTP threads all passed the limit's check before any
+#      was inserted (max_queued_jobs = 2 queued 4 and more)
+python3 -c '
+import json, sys
+s = json.load(open(sys.argv[1]))
+s["particles"] = [{"shape": "ball", "material": "rock", "list": [
+    {"position": [0.02 * (i % 50), 0.02 * (i // 50 % 50), 0.02 * (i // 2500)], "size": 0.01}
+    for i in range(20000)]}]
+json.dump(s, open(sys.argv[2], "w"))' "$tmp/quick.json" "$tmp/many.json"
+printf 'max_queued_jobs = 2\n' >"$tmp/q2.conf"
+start_daemon "$tmp/qdata" --device 99 --config "$tmp/q2.conf" || { summary; exit 1; }
+pids=""
+for k in 1 2 3 4 5 6 7 8 9 10 11 12; do
+    curl -s -o /dev/null -w '%{http_code}\n' --max-time 60 --data-binary @"$tmp/many.json" \
+        "$URL/v1/jobs" >"$tmp/par.$k" &
+    pids="$pids $!"
+done
+for p in $pids; do wait "$p"; done
+code=$(req GET '/v1/jobs?status=queued&limit=1000')
+check queue_limit_side_by_side "2 2 10" "$(jall id | tr , '\n' | grep -c .) $(cat "$tmp"/par.* | grep -c 201) $(cat "$tmp"/par.* | grep -c 429)"
+stop_daemon TERM
+
 # ---- tokens: 401 without, jobs belong to their token's name, ?token= for event streams
 printf '# test tokens\nalice-0123456789abcdef alice\nbob-0123456789abcdef   bob\n' >"$tmp/tokens"
 start_daemon "$tmp/tdata" --device 99 --tokens "$tmp/tokens" || { summary; exit 1; }
