@@ -167,7 +167,10 @@ static int parse_submission(http_req *r, submission *sub, enum MHD_Result *ret)
         return 1;
     }
     json_error_t je;
-    sub->doc = json_loadb(r->body, r->len, 0, &je);
+    /* any JSON value parses: a number, string or null is valid JSON that is not a scenario,
+     * answered as an array is (422 at ""), not as unparseable (jansson's default refuses them
+     * with "'[' or '{' expected") */
+    sub->doc = json_loadb(r->body, r->len, JSON_DECODE_ANY, &je);
     if (!sub->doc) {
         *ret = http_error(r, 400, "invalid_json", "the body is not JSON: line %d, column %d: %s",
                           je.line, je.column, je.text);

@@ -67,6 +67,14 @@ code=$(req POST /v1/jobs --data-binary @"$tmp/random.bin")
 check random_bytes_4xx "4 json" "$(echo "$code" | cut -c1) $(jstr code >/dev/null && head -c 9 "$tmp/body" | grep -q '{"error"' && echo json)"
 code=$(req POST /v1/jobs --data-binary '[1, 2]')
 check array_body_422 "422 invalid_scenario" "$code $(jstr code)"
+# JSON that is not an object is a scenario's problem at "", not unparseable (it was 400
+# invalid_json "'[' or '{' expected" for all but arrays)
+for v in null 42 string true; do
+    [ "$v" = string ] && v='"text"'
+    code=$(req POST /v1/jobs --data-binary "$v")
+    check "scalar_body_422_$(echo "$v" | tr -d '"')" "422 invalid_scenario at ''" \
+        "$code $(jstr code) at '$(jget "$tmp/body" 'd["error"]["details"][0]["path"]')'"
+done
 
 # ---- a job: 201, Location, the job's fields
 code=$(req POST /v1/jobs --data-binary @"$tmp/quick.json")
