@@ -134,6 +134,14 @@ for q in status=%ff status=bogus limit=0 limit=1001 limit=abc after=0123456789ab
     code=$(req GET "/v1/jobs?$q")
     check "list_bad_param_$q" "400 invalid_parameter" "$code $(jstr code)"
 done
+# a parameter without a value, or given twice, was taken as absent or as its first value (a
+# list of 50 jobs for "?limit", "?limit=1&limit=abc" answered as limit=1)
+for q in limit status tag after 'limit=1&limit=abc' 'status=queued&status=failed'; do
+    code=$(req GET "/v1/jobs?$q")
+    check "list_bad_param_$(echo "$q" | tr '&=' '+-')" "400 invalid_parameter" "$code $(jstr code)"
+done
+code=$(req GET '/v1/device?selftest')
+check device_selftest_without_value_400 "400 invalid_parameter" "$code $(jstr code)"
 
 # ---- SSE: a client listening to a queued job sees its status, then its cancellation, then
 #      the end of the stream
