@@ -167,7 +167,10 @@ static int parse_submission(http_req *r, submission *sub, enum MHD_Result *ret)
         return 1;
     }
     json_error_t je;
-    sub->doc = json_loadb(r->body, r->len, 0, &je);
+    /* any JSON value parses: a number, string or null is valid JSON that is not a scenario,
+     * answered as an array is (422 at ""), not as unparseable (jansson's default refuses them
+     * with "'[' or '{' expected") */
+    sub->doc = json_loadb(r->body, r->len, JSON_DECODE_ANY, &je);
     if (!sub->doc) {
         *ret = http_error(r, 400, "invalid_json", "the body is not JSON: line %d, column %d: %s",
                           je.line, je.column, je.text);
@@ -310,13 +313,46 @@ typedef struct insert_ctx {
     const char *scenario, *key, *hash;
     char existing[24];
     int rc;
+    int full; /* the queue holds max_queued_jobs: nothing inserted */
 } insert_ctx;
 
-/* Inserts the job and announces it, before the worker may claim it (worker_enqueue). */
+/* Whether the queue holds max_queued_jobs jobs; -1 when the database fails. */
+static int queue_full(app *a)
+{
+    long counts[JOB_NSTATUS];
+    if (job_store_count(a->st, counts) != JS_OK) return -1;
+    return counts[JOB_QUEUED] >= a->cfg->max_queued;
+}
+
+static enum MHD_Result queue_full_answer(http_req *r)
+{
+    json_t *e = json_pack("{s:{s:s, s:s}}", "error", "code", "queue_full", "message",
+                          "the queue is full (max_queued_jobs); retry later");
+    return http_json_hdr(r, 429, e, "Retry-After", "30");
+}
+
+/*
+ * Inserts the job and announces it, before the worker may claim it (worker_enqueue). The queue
+ * limit is checked here too: every insert runs under the worker's lock, one at a time, whereas
+ * submissions parsed side by side all passed the early check before any of them was inserted
+ * (30 parallel POSTs against max_queued_jobs = 5 queued 7). A known idempotency key still gets
+ * its job when the queue is full.
+ */
 static int insert_job(void *ctx)
 {
     insert_ctx *c = ctx;
-    c->rc = job_store_insert(c->r->app->st, &c->job, c->scenario, c->key, c->hash, c->existing);
+    app *a = c->r->app;
+    if (c->key) {
+        c->rc = job_store_idempotent(a->st, c->r->owner, c->key, c->hash, c->existing);
+        if (c->rc != JS_NOTFOUND) return -1;
+    }
+    int full = queue_full(a);
+    if (full) {
+        c->full = full > 0;
+        c->rc = JS_ERROR;
+        return -1;
+    }
+    c->rc = job_store_insert(a->st, &c->job, c->scenario, c->key, c->hash, c->existing);
     if (c->rc != JS_OK) return -1;
     job_json_publish(c->r->app->hub, &c->job);
     return 0;
@@ -356,13 +392,10 @@ enum MHD_Result api_jobs_create(http_req *r)
         int rc = job_store_idempotent(a->st, r->owner, key, hash, existing);
         if (rc != JS_NOTFOUND) return seen_key(r, rc, key, existing);
     }
-    long counts[JOB_NSTATUS];
-    if (job_store_count(a->st, counts) != JS_OK) return db_error(r);
-    if (counts[JOB_QUEUED] >= a->cfg->max_queued) {
-        json_t *e = json_pack("{s:{s:s, s:s}}", "error", "code", "queue_full", "message",
-                              "the queue is full (max_queued_jobs); retry later");
-        return http_json_hdr(r, 429, e, "Retry-After", "30");
-    }
+    /* refused before parsing the body; insert_job decides for submissions side by side */
+    int full = queue_full(a);
+    if (full < 0) return db_error(r);
+    if (full) return queue_full_answer(r);
     submission sub;
     enum MHD_Result ret;
     if (parse_submission(r, &sub, &ret)) return ret;
@@ -387,6 +420,7 @@ enum MHD_Result api_jobs_create(http_req *r)
         fprintf(stderr, "polydemd: job %s (%s) queued: %ld particles, %ld steps\n", c.job.id,
                 pd_scenario_name(sub.s), sub.sum.particles, sub.sum.steps);
     submission_free(&sub);
+    if (c.full) return queue_full_answer(r);
     if (c.rc != JS_OK) return seen_key(r, c.rc, key, c.existing);
     return send_job(r, 201, c.job.id, 1);
 }

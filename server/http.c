@@ -109,6 +109,8 @@ const char *http_arg(http_req *r, const char *key)
 typedef struct args_check {
     const char *const *allowed;
     const char *bad;
+    const char *why; /* what is wrong with bad */
+    unsigned seen;   /* bit i: allowed[i] was given */
 } args_check;
 
 static enum MHD_Result check_arg(void *cls, enum MHD_ValueKind kind, const char *key,
@@ -116,18 +118,30 @@ static enum MHD_Result check_arg(void *cls, enum MHD_ValueKind kind, const char 
 {
     args_check *c = cls;
     (void)kind;
-    (void)value;
-    for (const char *const *a = c->allowed; *a; a++)
-        if (!strcmp(*a, key)) return MHD_YES;
+    for (unsigned i = 0; c->allowed[i]; i++) {
+        if (strcmp(c->allowed[i], key)) continue;
+        /* "?limit" has no value and "?limit=5&limit=abc" two: http_arg would see none, or the
+         * first only, and the request went on as if the parameter were absent or valid */
+        if (!value) c->why = "has no value (write NAME=VALUE)";
+        if (i < 8 * sizeof c->seen && (c->seen & 1u << i)) c->why = "is given more than once";
+        if (i < 8 * sizeof c->seen) c->seen |= 1u << i;
+        if (!c->why) return MHD_YES;
+        c->bad = key;
+        return MHD_NO;
+    }
     c->bad = key;
     return MHD_NO;
 }
 
 int http_args_only(http_req *r, const char *const *allowed, enum MHD_Result *ret)
 {
-    args_check c = {allowed, NULL};
+    args_check c = {allowed, NULL, NULL, 0};
     MHD_get_connection_values(r->conn, MHD_GET_ARGUMENT_KIND, check_arg, &c);
     if (!c.bad) return 0;
+    if (c.why) {
+        *ret = http_error(r, 400, "invalid_parameter", "query parameter '%.100s' %s", c.bad, c.why);
+        return 1;
+    }
     char list[256] = "";
     for (const char *const *a = allowed; *a; a++) {
         size_t n = strlen(list);

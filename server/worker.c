@@ -357,6 +357,11 @@ void worker_stop(worker *w)
     if (w->thread_started) pthread_join(w->thread, NULL);
     w->thread_started = 0;
     pthread_mutex_lock(&w->mu);
+    /* A self-test asked for with GET /v1/device?selftest=1 runs in that request's thread, not
+     * the worker's: closing the device under it crashed the daemon at SIGTERM. It cannot be
+     * interrupted, so wait for it (selftest_run clears busy and broadcasts). */
+    while (w->busy)
+        pthread_cond_wait(&w->cv, &w->mu);
     pd_device_close(w->dev);
     w->dev = NULL;
     pthread_mutex_unlock(&w->mu);

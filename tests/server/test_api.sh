@@ -67,6 +67,14 @@ code=$(req POST /v1/jobs --data-binary @"$tmp/random.bin")
 check random_bytes_4xx "4 json" "$(echo "$code" | cut -c1) $(jstr code >/dev/null && head -c 9 "$tmp/body" | grep -q '{"error"' && echo json)"
 code=$(req POST /v1/jobs --data-binary '[1, 2]')
 check array_body_422 "422 invalid_scenario" "$code $(jstr code)"
+# JSON that is not an object is a scenario's problem at "", not unparseable (it was 400
+# invalid_json "'[' or '{' expected" for all but arrays)
+for v in null 42 string true; do
+    [ "$v" = string ] && v='"text"'
+    code=$(req POST /v1/jobs --data-binary "$v")
+    check "scalar_body_422_$(echo "$v" | tr -d '"')" "422 invalid_scenario at ''" \
+        "$code $(jstr code) at '$(jget "$tmp/body" 'd["error"]["details"][0]["path"]')'"
+done
 
 # ---- a job: 201, Location, the job's fields
 code=$(req POST /v1/jobs --data-binary @"$tmp/quick.json")
@@ -126,6 +134,14 @@ for q in status=%ff status=bogus limit=0 limit=1001 limit=abc after=0123456789ab
     code=$(req GET "/v1/jobs?$q")
     check "list_bad_param_$q" "400 invalid_parameter" "$code $(jstr code)"
 done
+# a parameter without a value, or given twice, was taken as absent or as its first value (a
+# list of 50 jobs for "?limit", "?limit=1&limit=abc" answered as limit=1)
+for q in limit status tag after 'limit=1&limit=abc' 'status=queued&status=failed'; do
+    code=$(req GET "/v1/jobs?$q")
+    check "list_bad_param_$(echo "$q" | tr '&=' '+-')" "400 invalid_parameter" "$code $(jstr code)"
+done
+code=$(req GET '/v1/device?selftest')
+check device_selftest_without_value_400 "400 invalid_parameter" "$code $(jstr code)"
 
 # ---- SSE: a client listening to a queued job sees its status, then its cancellation, then
 #      the end of the stream
@@ -325,6 +341,29 @@ check sse_streams_end_cleanly_at_sigterm "0 0 0 0 0 0" "$(cat "$tmp"/sse_rc.* | 
 start_daemon "$tmp/data" --device 99 || { summary; exit 1; }
 code=$(req GET '/v1/jobs?status=queued&limit=1000')
 check restart_keeps_jobs "200 8" "$code $(jall id | tr , '\n' | wc -l)"
+stop_daemon TERM
+
+# ---- the queue limit holds for submissions side by side: 12 at once, each slow enough to parse
+#      (20 000 listed particles) that the HTTP threads all passed the limit's check before any
+#      was inserted (max_queued_jobs = 2 queued 4 and more)
+python3 -c '
+import json, sys
+s = json.load(open(sys.argv[1]))
+s["particles"] = [{"shape": "ball", "material": "rock", "list": [
+    {"position": [0.02 * (i % 50), 0.02 * (i // 50 % 50), 0.02 * (i // 2500)], "size": 0.01}
+    for i in range(20000)]}]
+json.dump(s, open(sys.argv[2], "w"))' "$tmp/quick.json" "$tmp/many.json"
+printf 'max_queued_jobs = 2\n' >"$tmp/q2.conf"
+start_daemon "$tmp/qdata" --device 99 --config "$tmp/q2.conf" || { summary; exit 1; }
+pids=""
+for k in 1 2 3 4 5 6 7 8 9 10 11 12; do
+    curl -s -o /dev/null -w '%{http_code}\n' --max-time 60 --data-binary @"$tmp/many.json" \
+        "$URL/v1/jobs" >"$tmp/par.$k" &
+    pids="$pids $!"
+done
+for p in $pids; do wait "$p"; done
+code=$(req GET '/v1/jobs?status=queued&limit=1000')
+check queue_limit_side_by_side "2 2 10" "$(jall id | tr , '\n' | grep -c .) $(cat "$tmp"/par.* | grep -c 201) $(cat "$tmp"/par.* | grep -c 429)"
 stop_daemon TERM
 
 # ---- tokens: 401 without, jobs belong to their token's name, ?token= for event streams

@@ -154,4 +154,22 @@ check delete_204 204 "$code"
 check result_files_removed 0 "$(ls "$tmp/data/results" | grep -c "^$id")"
 
 stop_daemon TERM && ok sigterm_exit_0
+
+# ---- SIGTERM while a self-test asked for over HTTP runs: it runs in the request's thread, and
+#      the shutdown closed the device under it (a segmentation fault). The request itself may
+#      be cut off: the shutdown does not wait for answers in flight.
+start_daemon "$tmp/data" --no-selftest || { summary; exit 1; }
+curl -s --max-time 120 -o /dev/null "$URL/v1/device?selftest=1" &
+st_pid=$!
+i=0
+st=""
+while [ $i -lt 300 ] && [ "$st" != running ]; do
+    req GET /v1/device >/dev/null
+    st=$(jget "$tmp/body" 'd["selftest"]["status"]')
+    sleep 0.05
+    i=$((i + 1))
+done
+check selftest_running_at_sigterm running "$st"
+stop_daemon TERM && ok sigterm_during_selftest_exit_0
+wait "$st_pid"
 summary
