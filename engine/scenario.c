@@ -27,6 +27,7 @@ typedef struct sc_parse {
     pd_diags *d;
     const char *base_dir;
     int failed;
+    int ints_as_reals; /* read with JSON_DECODE_INT_AS_REAL: integers beyond 2^53 are not exact */
 } sc_parse;
 
 void pd_diags_free(pd_diags *d)
@@ -90,6 +91,65 @@ static void child_i(char *out, size_t n, const char *at, size_t i)
     put(out, n, "%s/%zu", at, i);
 }
 
+/*
+ * The JSON pointer of the value being read at byte `stop` of text, which a JSON parser gave up on
+ * (jansson reports a line and column, not a field). A light scan: strings skipped, containers
+ * stacked, object keys and array indices noted; keys are copied with their escapes undone only
+ * for \" \\ and \/ (a key with other escapes names no field anyway).
+ */
+static void path_at(const char *text, size_t stop, char *out, size_t n)
+{
+    enum { DEPTH = 16 };
+    struct {
+        char kind; /* '{' or '[' */
+        int in_value;
+        size_t index;
+        char key[SC_NAME_MAX];
+    } st[DEPTH];
+    int depth = 0; /* frames, counting those beyond DEPTH that are not kept */
+    for (size_t i = 0; i < stop && text[i]; i++) {
+        char c = text[i];
+        if (c == '"') {
+            int is_key =
+                depth > 0 && depth <= DEPTH && st[depth - 1].kind == '{' && !st[depth - 1].in_value;
+            size_t k = 0;
+            for (i++; i < stop && text[i] && text[i] != '"'; i++) {
+                if (text[i] == '\\' && text[i + 1]) i++;
+                if (is_key && k + 1 < SC_NAME_MAX) st[depth - 1].key[k++] = text[i];
+            }
+            if (is_key) st[depth - 1].key[k] = 0;
+            if (i >= stop || !text[i]) break;
+        } else if (c == '{' || c == '[') {
+            if (depth < DEPTH) {
+                st[depth].kind = c;
+                st[depth].in_value = c == '[';
+                st[depth].index = 0;
+                st[depth].key[0] = 0;
+            }
+            depth++;
+        } else if (c == '}' || c == ']') {
+            depth -= depth > 0;
+        } else if (depth > 0 && depth <= DEPTH && c == ':') {
+            st[depth - 1].in_value = 1;
+        } else if (depth > 0 && depth <= DEPTH && c == ',') {
+            if (st[depth - 1].kind == '[')
+                st[depth - 1].index++;
+            else
+                st[depth - 1].in_value = 0;
+        }
+    }
+    char a[SC_PATH_MAX], b[SC_PATH_MAX];
+    a[0] = 0;
+    for (int k = 0; k < depth && k < DEPTH && st[k].in_value; k++) {
+        if (st[k].kind == '[')
+            child_i(b, sizeof b, a, st[k].index);
+        else
+            child(b, sizeof b, a, st[k].key);
+        put(a, sizeof a, "%s", b);
+    }
+    put(out, n, "%s", a);
+}
+
 /* Unknown keys of an object are errors; allowed is NULL-terminated. */
 static void only(sc_parse *p, json_t *o, const char *at, const char *const *allowed)
 {
@@ -145,7 +205,7 @@ static double num(sc_parse *p, json_t *o, const char *at, const char *key, int r
  * Whether v is an integer in [lo, hi], stored in *out: a JSON number with no fraction, 80 or 80.0,
  * as the schema's "integer" counts them (JSON Schema 2020-12 section 6.1.1 takes 80.0 as 80).
  */
-static int int_value(json_t *v, long long lo, long long hi, long long *out)
+static int int_value(const sc_parse *p, json_t *v, long long lo, long long hi, long long *out)
 {
     if (json_is_integer(v)) {
         if (json_integer_value(v) < lo || json_integer_value(v) > hi) return 0;
@@ -156,6 +216,7 @@ static int int_value(json_t *v, long long lo, long long hi, long long *out)
     double x = json_real_value(v);
     /* (double)hi rounds up for hi near 2^63: such a real must not reach the cast */
     if (!(x >= (double)lo && x <= (double)hi) || x != floor(x) || !(fabs(x) < 0x1p63)) return 0;
+    if (p->ints_as_reals && fabs(x) >= 0x1p53) return 0; /* which integer it was is lost */
     if ((long long)x < lo || (long long)x > hi) return 0;
     *out = (long long)x;
     return 1;
@@ -170,7 +231,7 @@ static long long integer(sc_parse *p, json_t *o, const char *at, const char *key
     json_t *v = json_object_get(o, key);
     long long x;
     if (!v) return def;
-    if (!int_value(v, lo, hi, &x)) {
+    if (!int_value(p, v, lo, hi, &x)) {
         diag(p, c, "must be an integer from %lld to %lld", lo, hi);
         return def;
     }
@@ -591,7 +652,7 @@ static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
                     put(c, sizeof c, "%s/triangles/%zu", at, i);
                     diag(p, c, "must be [i, j, k] vertex indices");
                     bad = 1;
-                } else if (!int_value(x, 0, (long long)nv - 1, &ix)) {
+                } else if (!int_value(p, x, 0, (long long)nv - 1, &ix)) {
                     /* checked here, before the cast to int, which wrapped 4294967296 to 0 */
                     put(c, sizeof c, "%s/triangles/%zu/%d", at, i, k);
                     diag(p, c, "must be a vertex index, an integer from 0 to %zu", nv - 1);
@@ -1182,10 +1243,24 @@ int pd_scenario_parse(const char *json_text, const char *base_dir, pd_scenario *
     *out = NULL;
     json_error_t je;
     json_t *root = json_loads(json_text, JSON_REJECT_DUPLICATES, &je);
-    sc_parse p = {NULL, diags, base_dir, 0};
+    sc_parse p = {NULL, diags, base_dir, 0, 0};
+    if (!root && !strncmp(je.text, "too big", 7)) { /* "too big [negative] integer" */
+        /* An integer beyond 64 bits is still a JSON number: the schema takes 1e23 written out in
+         * full where a number is meant, and refuses it by range where an integer is. Read as
+         * doubles, it reaches the field that judges it. */
+        root = json_loads(json_text, JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL, &je);
+        p.ints_as_reals = root != NULL;
+    }
     if (!root) {
-        char at[64];
+        char at[64], where[SC_PATH_MAX];
         put(at, sizeof at, "line %d, column %d", je.line, je.column);
+        /* a number beyond a double's range (1e999) is valid JSON syntax: name its field */
+        if (!strncmp(je.text, "real number overflow", 20)) {
+            path_at(json_text, je.position > 0 ? (size_t)je.position - 1 : 0, where, sizeof where);
+            diag(&p, where, "beyond the range of a double (1.8e308), at %s: %s", at, je.text);
+            return pd_error_set(err, PD_EINVAL, "%s: beyond the range of a double, at %s: %s",
+                                where[0] ? where : "/", at, je.text);
+        }
         diag(&p, "", "not valid JSON at %s: %s", at, je.text);
         return pd_error_set(err, PD_EINVAL, "scenario is not valid JSON at %s: %s", at, je.text);
     }

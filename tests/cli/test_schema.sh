@@ -94,6 +94,8 @@ PY
     both seed_1e18 accept $C 'd["seed"] = 1e18'
     both seed_2e19 refuse $C 'd["seed"] = 2e19'
     both seed_2_63 refuse $C 'd["seed"] = 2**63'
+    # an integer beyond 64 bits is a JSON number where a number is meant (jansson refused it)
+    both integer_1e23_as_number accept $H 'd["walls"][0]["center"] = [10**23, 0, 0]'
     # a listed group takes none of the generated group's fields
     both list_with_velocity refuse $C 'd["particles"][0]["velocity"] = [1, 0, 0]'
     both list_with_orientation refuse $C 'd["particles"][0]["orientation"] = "random"'

@@ -458,6 +458,18 @@ TEST(validate_agrees_with_the_schema)
                            "10.5, \"size\": 0.01, \"region\": {\"min\": [0,0,0], \"max\": "
                            "[0.1,0.1,0.1]}}]}",
                  "/particles/0/count", "must be an integer from 1 to 100000000");
+    /* numbers beyond a double's range or 64 bits were 'not valid JSON at line 1, column N' */
+    expect_error(BASE_HEAD "\"gravity\": [0, 0, -1e999]," BASE_GROUP, "/gravity/2",
+                 "beyond the range of a double");
+    expect_error(BASE_HEAD "\"walls\": [{\"name\": \"a\\\"b\", \"material\": \"rock\", \"box\": "
+                           "{\"min\": [-1,-1,-1], \"max\": [1,1e400,-0.5]}}]," BASE_GROUP,
+                 "/walls/0/box/max/1", "beyond the range of a double");
+    expect_error(BASE_HEAD "\"seed\": 100000000000000000000000," BASE_GROUP, "/seed",
+                 "must be an integer from 0");
+    /* a seed past 2^53 cannot be told apart from its neighbours once read as a double */
+    expect_error(BASE_HEAD "\"seed\": 9007199254740993, \"gravity\": [0, 0, "
+                           "-10000000000000000000000000]," BASE_GROUP,
+                 "/seed", "must be an integer from 0");
     /* integers written as reals without a fraction are integers */
     pd_diags d;
     pd_scenario *s = parse(SHAPE_HEAD("{" TET_VERTS ", \"triangles\": [[0.0,1,2],[0,3,1],[0,2,3],"
