@@ -1254,12 +1254,17 @@ int pd_scenario_parse(const char *json_text, const char *base_dir, pd_scenario *
     if (!root) {
         char at[64], where[SC_PATH_MAX];
         put(at, sizeof at, "line %d, column %d", je.line, je.column);
-        /* a number beyond a double's range (1e999) is valid JSON syntax: name its field */
-        if (!strncmp(je.text, "real number overflow", 20)) {
+        /* a number beyond a double's range (1e999), or a string holding \u0000 (no name or path
+         * can), is valid JSON syntax: name its field */
+        int overflow = !strncmp(je.text, "real number overflow", 20),
+            nul = !strncmp(je.text, "\\u0000", 6);
+        if (overflow || nul) {
+            const char *what = overflow ? "beyond the range of a double (1.8e308)"
+                                        : "a string must not contain \\u0000";
             path_at(json_text, je.position > 0 ? (size_t)je.position - 1 : 0, where, sizeof where);
-            diag(&p, where, "beyond the range of a double (1.8e308), at %s: %s", at, je.text);
-            return pd_error_set(err, PD_EINVAL, "%s: beyond the range of a double, at %s: %s",
-                                where[0] ? where : "/", at, je.text);
+            diag(&p, where, "%s, at %s: %s", what, at, je.text);
+            return pd_error_set(err, PD_EINVAL, "%s: %s, at %s: %s", where[0] ? where : "/", what,
+                                at, je.text);
         }
         diag(&p, "", "not valid JSON at %s: %s", at, je.text);
         return pd_error_set(err, PD_EINVAL, "scenario is not valid JSON at %s: %s", at, je.text);

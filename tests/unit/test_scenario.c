@@ -466,6 +466,8 @@ TEST(validate_agrees_with_the_schema)
                  "/walls/0/box/max/1", "beyond the range of a double");
     expect_error(BASE_HEAD "\"seed\": 100000000000000000000000," BASE_GROUP, "/seed",
                  "must be an integer from 0");
+    expect_error(BASE_HEAD "\"name\": \"a\\u0000b\"," BASE_GROUP, "/name",
+                 "a string must not contain \\u0000");
     /* a seed past 2^53 cannot be told apart from its neighbours once read as a double */
     expect_error(BASE_HEAD "\"seed\": 9007199254740993, \"gravity\": [0, 0, "
                            "-10000000000000000000000000]," BASE_GROUP,
