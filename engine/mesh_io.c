@@ -8,6 +8,7 @@
  */
 #include <ctype.h>
 #include <errno.h>
+#include <fcntl.h>
 #include <float.h>
 #include <limits.h>
 #include <math.h>
@@ -16,6 +17,8 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include "mesh_internal.h"
 
@@ -25,15 +28,45 @@
 
 /* ---- reading files ------------------------------------------------------------------------- */
 
+/*
+ * Opens a file to read. A FIFO is opened without waiting for a writer (fopen would wait forever
+ * for one that never comes: a scenario naming a FIFO as its mesh hung `polydem validate`), then
+ * read as a pipe: what a writer sends, or nothing. A device (/dev/zero) is refused rather than
+ * read up to the size limit.
+ */
+static FILE *open_read(const char *path, pd_error *err, int *rc)
+{
+    int fd = open(path, O_RDONLY | O_NONBLOCK);
+    struct stat st;
+    if (fd < 0 || fstat(fd, &st) != 0) {
+        *rc = pd_error_set(err, PD_EIO, "%s: cannot open: %s", path, strerror(errno));
+        if (fd >= 0) close(fd);
+        return NULL;
+    }
+    if (S_ISCHR(st.st_mode) || S_ISBLK(st.st_mode)) {
+        close(fd);
+        *rc = pd_error_set(err, PD_EIO, "%s: cannot read: a device, not a file", path);
+        return NULL;
+    }
+    /* blocking again, so that a pipe's reads wait for its writer's data */
+    int fl = fcntl(fd, F_GETFL);
+    FILE *f = fl < 0 || fcntl(fd, F_SETFL, fl & ~O_NONBLOCK) < 0 ? NULL : fdopen(fd, "rb");
+    if (!f) {
+        *rc = pd_error_set(err, PD_EIO, "%s: cannot open: %s", path, strerror(errno));
+        close(fd);
+    }
+    return f;
+}
+
 /* Reads the whole file (works for pipes too) into a NUL-terminated buffer. */
 static int read_whole(const char *path, char **buf_out, size_t *len_out, pd_error *err)
 {
     *buf_out = NULL;
-    FILE *f = fopen(path, "rb");
-    if (!f) return pd_error_set(err, PD_EIO, "%s: cannot open: %s", path, strerror(errno));
+    int rc = PD_OK;
+    FILE *f = open_read(path, err, &rc);
+    if (!f) return rc;
     size_t cap = 1 << 16, len = 0;
     char *buf = malloc(cap + 1);
-    int rc = PD_OK;
     if (!buf) {
         rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory", path);
         goto done;

@@ -8,6 +8,7 @@
  */
 #include <errno.h>
 #include <jansson.h>
+#include <limits.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -26,6 +27,7 @@ typedef struct sc_parse {
     pd_diags *d;
     const char *base_dir;
     int failed;
+    int ints_as_reals; /* read with JSON_DECODE_INT_AS_REAL: integers beyond 2^53 are not exact */
 } sc_parse;
 
 void pd_diags_free(pd_diags *d)
@@ -89,6 +91,65 @@ static void child_i(char *out, size_t n, const char *at, size_t i)
     put(out, n, "%s/%zu", at, i);
 }
 
+/*
+ * The JSON pointer of the value being read at byte `stop` of text, which a JSON parser gave up on
+ * (jansson reports a line and column, not a field). A light scan: strings skipped, containers
+ * stacked, object keys and array indices noted; keys are copied with their escapes undone only
+ * for \" \\ and \/ (a key with other escapes names no field anyway).
+ */
+static void path_at(const char *text, size_t stop, char *out, size_t n)
+{
+    enum { DEPTH = 16 };
+    struct {
+        char kind; /* '{' or '[' */
+        int in_value;
+        size_t index;
+        char key[SC_NAME_MAX];
+    } st[DEPTH];
+    int depth = 0; /* frames, counting those beyond DEPTH that are not kept */
+    for (size_t i = 0; i < stop && text[i]; i++) {
+        char c = text[i];
+        if (c == '"') {
+            int is_key =
+                depth > 0 && depth <= DEPTH && st[depth - 1].kind == '{' && !st[depth - 1].in_value;
+            size_t k = 0;
+            for (i++; i < stop && text[i] && text[i] != '"'; i++) {
+                if (text[i] == '\\' && text[i + 1]) i++;
+                if (is_key && k + 1 < SC_NAME_MAX) st[depth - 1].key[k++] = text[i];
+            }
+            if (is_key) st[depth - 1].key[k] = 0;
+            if (i >= stop || !text[i]) break;
+        } else if (c == '{' || c == '[') {
+            if (depth < DEPTH) {
+                st[depth].kind = c;
+                st[depth].in_value = c == '[';
+                st[depth].index = 0;
+                st[depth].key[0] = 0;
+            }
+            depth++;
+        } else if (c == '}' || c == ']') {
+            depth -= depth > 0;
+        } else if (depth > 0 && depth <= DEPTH && c == ':') {
+            st[depth - 1].in_value = 1;
+        } else if (depth > 0 && depth <= DEPTH && c == ',') {
+            if (st[depth - 1].kind == '[')
+                st[depth - 1].index++;
+            else
+                st[depth - 1].in_value = 0;
+        }
+    }
+    char a[SC_PATH_MAX], b[SC_PATH_MAX];
+    a[0] = 0;
+    for (int k = 0; k < depth && k < DEPTH && st[k].in_value; k++) {
+        if (st[k].kind == '[')
+            child_i(b, sizeof b, a, st[k].index);
+        else
+            child(b, sizeof b, a, st[k].key);
+        put(a, sizeof a, "%s", b);
+    }
+    put(out, n, "%s", a);
+}
+
 /* Unknown keys of an object are errors; allowed is NULL-terminated. */
 static void only(sc_parse *p, json_t *o, const char *at, const char *const *allowed)
 {
@@ -140,22 +201,41 @@ static double num(sc_parse *p, json_t *o, const char *at, const char *key, int r
     return x;
 }
 
-/* An integer field in [lo, hi] (a JSON number with no fraction: 80 or 80.0); absent: def. */
+/*
+ * Whether v is an integer in [lo, hi], stored in *out: a JSON number with no fraction, 80 or 80.0,
+ * as the schema's "integer" counts them (JSON Schema 2020-12 section 6.1.1 takes 80.0 as 80).
+ */
+static int int_value(const sc_parse *p, json_t *v, long long lo, long long hi, long long *out)
+{
+    if (json_is_integer(v)) {
+        if (json_integer_value(v) < lo || json_integer_value(v) > hi) return 0;
+        *out = json_integer_value(v);
+        return 1;
+    }
+    if (!json_is_real(v)) return 0;
+    double x = json_real_value(v);
+    /* (double)hi rounds up for hi near 2^63: such a real must not reach the cast */
+    if (!(x >= (double)lo && x <= (double)hi) || x != floor(x) || !(fabs(x) < 0x1p63)) return 0;
+    if (p->ints_as_reals && fabs(x) >= 0x1p53) return 0; /* which integer it was is lost */
+    if ((long long)x < lo || (long long)x > hi) return 0;
+    *out = (long long)x;
+    return 1;
+}
+
+/* An integer field in [lo, hi]; absent: def. */
 static long long integer(sc_parse *p, json_t *o, const char *at, const char *key, long long def,
                          long long lo, long long hi)
 {
     char c[SC_PATH_MAX];
     child(c, sizeof c, at, key);
     json_t *v = json_object_get(o, key);
+    long long x;
     if (!v) return def;
-    double x = json_is_integer(v) ? (double)json_integer_value(v)
-               : json_is_real(v)  ? json_real_value(v)
-                                  : NAN;
-    if (!(x >= (double)lo && x <= (double)hi) || x != floor(x)) {
+    if (!int_value(p, v, lo, hi, &x)) {
         diag(p, c, "must be an integer from %lld to %lld", lo, hi);
         return def;
     }
-    return json_is_integer(v) ? json_integer_value(v) : (long long)x;
+    return x;
 }
 
 /* A fixed-length numeric array field; absent: def (when def is NULL the field is required). */
@@ -520,7 +600,14 @@ static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
             diag(p, c, "only a \"rock\" takes a seed");
         }
         if (pd_mesh_builtin(builtin, (int)tri, (unsigned)seed, &m, &err) != PD_OK) {
-            child(c, sizeof c, at, "builtin");
+            /* a count the shape does not come in is the count's fault, not the name's */
+            static const char *const known[] = {"cube", "tetrahedron", "schonhardt", "icosphere",
+                                                "rock"};
+            int named = 0;
+            for (int k = 0; k < 5; k++)
+                named |= !strcmp(builtin, known[k]);
+            child(c, sizeof c, at,
+                  named && json_object_get(v, "triangles") ? "triangles" : "builtin");
             diag(p, c, "%s", err.msg);
         }
     } else if (file) {
@@ -529,6 +616,10 @@ static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
             diag(p, at, "\"seed\" and \"triangles\" belong to a \"builtin\" shape, not a \"mesh\"");
         m = load_mesh_file(p, file, at);
     } else {
+        if (json_object_get(v, "seed")) { /* was silently ignored */
+            child(c, sizeof c, at, "seed");
+            diag(p, c, "only a \"builtin\": \"rock\" takes a seed");
+        }
         json_t *tris = json_object_get(v, "triangles");
         size_t nv = json_is_array(verts) ? json_array_size(verts) : 0;
         size_t nt = json_is_array(tris) ? json_array_size(tris) : 0;
@@ -556,12 +647,18 @@ static pd_mesh *shape_mesh(sc_parse *p, json_t *v, const char *at)
             json_t *r = json_array_get(tris, i);
             for (int k = 0; k < 3 && !bad; k++) {
                 json_t *x = json_array_get(r, (size_t)k);
-                if (!json_is_array(r) || json_array_size(r) != 3 || !json_is_integer(x)) {
+                long long ix;
+                if (!json_is_array(r) || json_array_size(r) != 3 || !json_is_number(x)) {
                     put(c, sizeof c, "%s/triangles/%zu", at, i);
                     diag(p, c, "must be [i, j, k] vertex indices");
                     bad = 1;
+                } else if (!int_value(p, x, 0, (long long)nv - 1, &ix)) {
+                    /* checked here, before the cast to int, which wrapped 4294967296 to 0 */
+                    put(c, sizeof c, "%s/triangles/%zu/%d", at, i, k);
+                    diag(p, c, "must be a vertex index, an integer from 0 to %zu", nv - 1);
+                    bad = 1;
                 } else {
-                    tx[3 * i + k] = (int)json_integer_value(x);
+                    tx[3 * i + k] = (int)ix;
                 }
             }
         }
@@ -664,6 +761,14 @@ static void parse_size(sc_parse *p, json_t *g, const char *at, sc_size *z)
     const char *dist = str(p, v, c, "distribution", 1);
     if (dist && !strcmp(dist, "uniform")) {
         z->dist = SC_SIZE_UNIFORM;
+        /* a uniform distribution has no mean or std: given, they were silently ignored */
+        static const char *const normal_only[] = {"mean", "std"};
+        for (int k = 0; k < 2; k++)
+            if (json_object_get(v, normal_only[k])) {
+                char ck[SC_PATH_MAX];
+                child(ck, sizeof ck, c, normal_only[k]);
+                diag(p, ck, "only for \"distribution\": \"normal\" (uniform takes min and max)");
+            }
         z->min = num(p, v, c, "min", 1, 0.01, POSITIVE, "m");
         z->max = num(p, v, c, "max", 1, z->min, POSITIVE, "m");
         z->mean = 0.5 * (z->min + z->max);
@@ -779,12 +884,10 @@ static void parse_particles(sc_parse *p, json_t *root)
             continue;
         }
         child(c, sizeof c, at, "count");
-        json_t *cnt = json_object_get(v, "count");
-        if (!json_is_integer(cnt) || json_integer_value(cnt) < 1 ||
-            json_integer_value(cnt) > 100000000)
+        if (!json_object_get(v, "count"))
             diag(p, c, "required: an integer from 1 to 1e8 (or give \"list\")");
         else
-            g->count = (long)json_integer_value(cnt);
+            g->count = (long)integer(p, v, at, "count", 0, 1, 100000000);
         parse_size(p, v, at, &g->size);
         json_t *reg = obj(p, v, at, "region", 1);
         if (reg) {
@@ -911,12 +1014,8 @@ static void parse_rest(sc_parse *p, json_t *root)
         s->double_precision = 0;
     else if (prec && strcmp(prec, "double"))
         diag(p, "/precision", "must be \"double\" or \"single\", got \"%s\"", prec);
-    json_t *seed = json_object_get(root, "seed");
-    s->seed = 1;
-    if (seed && (!json_is_integer(seed) || json_integer_value(seed) < 0))
-        diag(p, "/seed", "must be a non-negative integer");
-    else if (seed)
-        s->seed = (unsigned long long)json_integer_value(seed);
+    /* up to the largest integer a JSON parser of 64-bit integers reads (the schema's maximum) */
+    s->seed = (unsigned long long)integer(p, root, "", "seed", 1, 0, LLONG_MAX);
     if (numvec(p, root, "", "gravity", 3, g0, s->gravity)) {
         double g = hypot(hypot(s->gravity[0], s->gravity[1]), s->gravity[2]);
         if (!(g <= 1e6)) /* beyond any centrifuge; overflows the time step estimates */
@@ -946,16 +1045,19 @@ static void parse_rest(sc_parse *p, json_t *root)
             if (!json_is_array(fl)) diag(p, "/output/fields", "must be an array of field names");
             size_t i;
             json_t *v;
+            int listed = 0;
             json_array_foreach(fl, i, v)
             {
                 int bit = 0;
                 for (int k = 0; k < 4; k++)
                     if (json_is_string(v) && !strcmp(json_string_value(v), names[k])) bit = 1 << k;
-                if (!bit) {
-                    char c[SC_PATH_MAX];
-                    child_i(c, sizeof c, "/output/fields", i);
+                char c[SC_PATH_MAX];
+                child_i(c, sizeof c, "/output/fields", i);
+                if (!bit)
                     diag(p, c, "must be one of position, orientation, velocity, angular_velocity");
-                }
+                else if (listed & bit) /* the schema's uniqueItems */
+                    diag(p, c, "'%s' is listed twice", json_string_value(v));
+                listed |= bit;
                 s->output_fields |= bit;
             }
         }
@@ -1141,10 +1243,29 @@ int pd_scenario_parse(const char *json_text, const char *base_dir, pd_scenario *
     *out = NULL;
     json_error_t je;
     json_t *root = json_loads(json_text, JSON_REJECT_DUPLICATES, &je);
-    sc_parse p = {NULL, diags, base_dir, 0};
+    sc_parse p = {NULL, diags, base_dir, 0, 0};
+    if (!root && !strncmp(je.text, "too big", 7)) { /* "too big [negative] integer" */
+        /* An integer beyond 64 bits is still a JSON number: the schema takes 1e23 written out in
+         * full where a number is meant, and refuses it by range where an integer is. Read as
+         * doubles, it reaches the field that judges it. */
+        root = json_loads(json_text, JSON_REJECT_DUPLICATES | JSON_DECODE_INT_AS_REAL, &je);
+        p.ints_as_reals = root != NULL;
+    }
     if (!root) {
-        char at[64];
+        char at[64], where[SC_PATH_MAX];
         put(at, sizeof at, "line %d, column %d", je.line, je.column);
+        /* a number beyond a double's range (1e999), or a string holding \u0000 (no name or path
+         * can), is valid JSON syntax: name its field */
+        int overflow = !strncmp(je.text, "real number overflow", 20),
+            nul = !strncmp(je.text, "\\u0000", 6);
+        if (overflow || nul) {
+            const char *what = overflow ? "beyond the range of a double (1.8e308)"
+                                        : "a string must not contain \\u0000";
+            path_at(json_text, je.position > 0 ? (size_t)je.position - 1 : 0, where, sizeof where);
+            diag(&p, where, "%s, at %s: %s", what, at, je.text);
+            return pd_error_set(err, PD_EINVAL, "%s: %s, at %s: %s", where[0] ? where : "/", what,
+                                at, je.text);
+        }
         diag(&p, "", "not valid JSON at %s: %s", at, je.text);
         return pd_error_set(err, PD_EINVAL, "scenario is not valid JSON at %s: %s", at, je.text);
     }

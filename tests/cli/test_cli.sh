@@ -246,4 +246,17 @@ expect_fail unknown_option 2 "--bogus" -- $POLYDEM overlap builtin:cube builtin:
 expect_fail unknown_builtin 2 "dodecahedron" -- $POLYDEM mesh-info builtin:dodecahedron
 expect_fail unknown_command 2 "frobnicate" -- $POLYDEM frobnicate
 
+# 19. a mesh that is a FIFO with no writer, or a device: refused at once, naming the field (a FIFO
+# hung `validate` in fopen, waiting for a writer; /dev/zero was read up to the 2 GiB limit)
+mkfifo "$tmp/fifo.stl"
+sed 's|{"builtin": "rock", "triangles": 80}|{"mesh": "fifo.stl"}|' examples/collision.json >"$tmp/fifo.json"
+expect_fail mesh_fifo_without_writer 1 '/shapes/r/mesh: .*fifo.stl: empty file' -- timeout 20 $POLYDEM validate "$tmp/fifo.json"
+sed 's|{"builtin": "rock", "triangles": 80}|{"mesh": "/dev/zero"}|' examples/collision.json >"$tmp/zero.json"
+expect_fail mesh_device 1 '/shapes/r/mesh: /dev/zero: cannot read: a device' -- timeout 20 $POLYDEM validate "$tmp/zero.json"
+expect_fail mesh_info_device 2 '/dev/zero: cannot read: a device' -- timeout 20 $POLYDEM mesh-info /dev/zero
+# a pipe is still read: what its writer sends
+if cat "$tmp/cube.stl" | $POLYDEM mesh-info /dev/stdin >"$tmp/pipe.out" 2>&1 &&
+    grep -q '"triangles": 12' "$tmp/pipe.out"; then ok mesh_from_pipe
+else bad mesh_from_pipe "$(cat "$tmp/pipe.out")"; fi
+
 done_tests

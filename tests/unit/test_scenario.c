@@ -415,6 +415,82 @@ TEST(validate_refuses_what_run_cannot_do)
                  "/time/dt", "stable time step estimate");
 }
 
+/*
+ * Where `validate` disagreed with the schema (a QA pass, 2026-12-02, mutating scenarios one field
+ * at a time): each problem is reported at its own field, and integers are counted as JSON Schema
+ * counts them (10.0 is the integer 10).
+ */
+TEST(validate_agrees_with_the_schema)
+{
+#define SHAPE_HEAD(shape)                                                                          \
+    "{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"                                               \
+    "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"                     \
+    "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"                                     \
+    "\"shapes\": {\"s\": " shape "},"
+#define TET_VERTS "\"vertices\": [[1,1,1],[1,-1,-1],[-1,1,-1],[-1,-1,1]]"
+    /* an index of 2^32 was cast to int, wrapped to 0 and accepted */
+    expect_error(SHAPE_HEAD("{" TET_VERTS ", \"triangles\": [[4294967296,1,2],[0,3,1],[0,2,3],"
+                            "[1,3,2]]}") BASE_GROUP,
+                 "/shapes/s/triangles/0/0", "must be a vertex index, an integer from 0 to 3");
+    expect_error(SHAPE_HEAD("{" TET_VERTS ", \"triangles\": [[0,1,2],[0,3,1],[0,2,3],[1,3,4]]}")
+                     BASE_GROUP,
+                 "/shapes/s/triangles/3/2", "must be a vertex index");
+    /* a seed beside an inline mesh was silently ignored */
+    expect_error(SHAPE_HEAD("{" TET_VERTS ", \"triangles\": [[0,1,2],[0,3,1],[0,2,3],[1,3,2]], "
+                            "\"seed\": 3}") BASE_GROUP,
+                 "/shapes/s/seed", "only a \"builtin\": \"rock\" takes a seed");
+    /* a count the shape does not come in was reported at /shapes/s/builtin */
+    expect_error(SHAPE_HEAD("{\"builtin\": \"rock\", \"triangles\": 81}") BASE_GROUP,
+                 "/shapes/s/triangles", "bad triangle count 81");
+    /* a uniform size's mean was silently ignored */
+    expect_error(BASE_HEAD "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", \"count\": "
+                           "10, \"size\": {\"distribution\": \"uniform\", \"min\": 0.005, \"max\": "
+                           "0.01, \"mean\": 0.05}, \"region\": {\"min\": [0,0,0], \"max\": "
+                           "[1,1,1]}}]}",
+                 "/particles/0/size/mean", "only for \"distribution\": \"normal\"");
+    /* the schema's uniqueItems */
+    expect_error(BASE_HEAD "\"output\": {\"fields\": [\"velocity\", \"velocity\"]}," BASE_GROUP,
+                 "/output/fields/1", "'velocity' is listed twice");
+    expect_error(BASE_HEAD "\"seed\": 2e19," BASE_GROUP, "/seed",
+                 "must be an integer from 0 to 9223372036854775807");
+    expect_error(BASE_HEAD "\"seed\": -1," BASE_GROUP, "/seed", "must be an integer from 0");
+    expect_error(BASE_HEAD "\"particles\": [{\"shape\": \"s\", \"material\": \"rock\", \"count\": "
+                           "10.5, \"size\": 0.01, \"region\": {\"min\": [0,0,0], \"max\": "
+                           "[0.1,0.1,0.1]}}]}",
+                 "/particles/0/count", "must be an integer from 1 to 100000000");
+    /* numbers beyond a double's range or 64 bits were 'not valid JSON at line 1, column N' */
+    expect_error(BASE_HEAD "\"gravity\": [0, 0, -1e999]," BASE_GROUP, "/gravity/2",
+                 "beyond the range of a double");
+    expect_error(BASE_HEAD "\"walls\": [{\"name\": \"a\\\"b\", \"material\": \"rock\", \"box\": "
+                           "{\"min\": [-1,-1,-1], \"max\": [1,1e400,-0.5]}}]," BASE_GROUP,
+                 "/walls/0/box/max/1", "beyond the range of a double");
+    expect_error(BASE_HEAD "\"seed\": 100000000000000000000000," BASE_GROUP, "/seed",
+                 "must be an integer from 0");
+    expect_error(BASE_HEAD "\"name\": \"a\\u0000b\"," BASE_GROUP, "/name",
+                 "a string must not contain \\u0000");
+    /* a seed past 2^53 cannot be told apart from its neighbours once read as a double */
+    expect_error(BASE_HEAD "\"seed\": 9007199254740993, \"gravity\": [0, 0, "
+                           "-10000000000000000000000000]," BASE_GROUP,
+                 "/seed", "must be an integer from 0");
+    /* integers written as reals without a fraction are integers */
+    pd_diags d;
+    pd_scenario *s = parse(SHAPE_HEAD("{" TET_VERTS ", \"triangles\": [[0.0,1,2],[0,3,1],[0,2,3],"
+                                      "[1,3,2.0]]}") "\"seed\": 3.0, \"particles\": [{\"shape\": "
+                                                     "\"s\", \"material\": \"rock\", \"count\": "
+                                                     "10.0, \"size\": 0.01, \"region\": {\"min\": "
+                                                     "[0,0,0], \"max\": [0.1,0.1,0.1]}}]}",
+                           &d);
+    CHECK(s != NULL);
+    if (s) {
+        CHECK_EQ_INT(10, (int)s->group[0].count);
+        CHECK_EQ_INT(3, (int)s->seed);
+    }
+    pd_scenario_destroy(s);
+    pd_diags_free(&d);
+#undef TET_VERTS
+#undef SHAPE_HEAD
+}
+
 /* An empty object is invalid input, reported field by field, not an allocation failure. */
 TEST(empty_scenario_is_invalid_not_out_of_memory)
 {
@@ -527,6 +603,7 @@ int main(void)
     RUN(own_pair_needed_only_for_two_particles);
     RUN(errors_name_the_field);
     RUN(validate_refuses_what_run_cannot_do);
+    RUN(validate_agrees_with_the_schema);
     RUN(every_error_is_reported);
     RUN(empty_scenario_is_invalid_not_out_of_memory);
     RUN(unstable_dt_is_refused_with_the_estimate);
