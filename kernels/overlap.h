@@ -605,7 +605,9 @@ PD_FN void ovl_pass(ovl_ctx *c)
     for (int l = 0; l < c->nb; l++)
         c->xb[l] = 0;
 
-    /* the crossings: edges of one solid through faces of the other */
+    /* the crossings: edges of one solid through faces of the other; T's box and U's (cached)
+     * are each padded by half the cull margin (OVL_CULL) */
+    pd_real tpad = PD_R(OVL_CULL / 2) * c->pad;
     for (int k = 0; k < c->na; k++) {
         int t = c->near_a[k];
         ovl_tri T;
@@ -613,9 +615,7 @@ PD_FN void ovl_pass(ovl_ctx *c)
         T.id[1] = ta[3 * t + 1];
         T.id[2] = ta[3 * t + 2];
         T.slot = k;
-        /* T's box and U's (cached) are each padded by half the cull margin (OVL_CULL) */
-        ovl_tri_make(&T, ovl_va(c, T.id[0]), ovl_va(c, T.id[1]), ovl_va(c, T.id[2]),
-                     PD_R(OVL_CULL / 2) * c->pad);
+        ovl_tri_make(&T, ovl_va(c, T.id[0]), ovl_va(c, T.id[1]), ovl_va(c, T.id[2]), tpad);
         /* B open (a wall's part): A is not filtered, so most of its triangles lie beside all
          * of B's near ones; between particles the box where the kept parts meet did that */
         if (open_b && !ovl_boxes_meet(T.lo, T.hi, c->nblo, c->nbhi)) continue;
@@ -1241,6 +1241,7 @@ refilter:
                      ovl_va(c, in->ta[3 * t + 2]), PD_R(0));
         if (!c->filter || ovl_box_meets(c, &T)) c->near_a[c->na++] = t;
     }
+    pd_real hpad = PD_R(OVL_CULL / 2) * c->pad; /* half the cull margin, as ovl_pass pads T */
     c->nblo = v3(PD_REAL_MAX, PD_REAL_MAX, PD_REAL_MAX);
     c->nbhi = v3_scale(c->nblo, PD_R(-1));
     for (int l = 0; l < c->kb; l++) {
@@ -1249,7 +1250,6 @@ refilter:
         ovl_tri_make(&U, ovl_vb(c, in->tb[3 * u]), ovl_vb(c, in->tb[3 * u + 1]),
                      ovl_vb(c, in->tb[3 * u + 2]), PD_R(0));
         if (c->filter && !ovl_box_meets(c, &U)) continue;
-        pd_real hpad = PD_R(OVL_CULL / 2) * c->pad;
         if (open_b) {
             c->nblo = v3(pd_min(c->nblo.x, U.lo.x - hpad), pd_min(c->nblo.y, U.lo.y - hpad),
                          pd_min(c->nblo.z, U.lo.z - hpad));
