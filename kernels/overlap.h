@@ -1064,9 +1064,9 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     c->origin_in_b = -1;
     int open_b = (in->flags & OVL_OPEN_B) != 0;
 
-    /* eq. 5.3: the direction between the centres */
+    /* eq. 5.3: the direction between the centres, on a grid (ovl_dir_grid) */
     pd_v3 dc = v3_sub(in->cb, in->ca);
-    c->d = v3_dot(dc, dc) > PD_R(0) ? v3_unit(dc) : v3(0, 0, 1);
+    c->d = v3_dot(dc, dc) > PD_R(0) ? ovl_dir_grid(v3_unit(dc)) : v3(0, 0, 1);
     pd_v3 d = c->d;
     /* d expressed in B's frame, so B's vertices are projected before being transformed */
     pd_v3 db = v3(in->rot[0] * d.x + in->rot[3] * d.y + in->rot[6] * d.z,

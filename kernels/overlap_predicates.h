@@ -283,6 +283,28 @@ PD_FN PD_GLOBAL pd_real *ovl_ndr(const ovl_ctx *c, int k)
  */
 #define OVL_CULL 4
 
+/*
+ * The filter's direction d is also the direction of every ray cast (ovl_ray_parity), so it is
+ * rounded to a grid of OVL_DIR_GRID steps per unit before use: any direction serves both, but
+ * the exact one between the centres carries the very offsets the predicates snap. Two cubes
+ * stacked with side faces delta apart (delta within the tie band) have delta / |c_b - c_a| as
+ * the component of d across those faces: a ray from a corner on one face then crosses the other
+ * at an angle of about the resolution, at t = delta / sin(angle), a point that no snap of delta
+ * to 0 can place (it moves to the ray's start), and the parities came out wrong (a 1 m cube
+ * given 0.6 m^3 of overlap for 1.1e-4; tests/physics/test_overlap.c,
+ * cube_sides_across_the_tie_band). On the grid such components are exactly 0, so the rays run
+ * exactly along the faces, which ovl_parallel rejects; a face crossed at all is crossed at an
+ * angle of at least about 1 / OVL_DIR_GRID unless it is tilted to d by chance.
+ */
+#define OVL_DIR_GRID 1024
+
+PD_FN pd_v3 ovl_dir_grid(pd_v3 u)
+{
+    pd_real g = PD_R(OVL_DIR_GRID);
+    return v3_unit(v3(PD_FLOOR(u.x * g + PD_R(0.5)) / g, PD_FLOOR(u.y * g + PD_R(0.5)) / g,
+                      PD_FLOOR(u.z * g + PD_R(0.5)) / g));
+}
+
 PD_FN pd_real ovl_det(pd_v3 a, pd_v3 b, pd_v3 c)
 {
     return v3_dot(a, v3_cross(b, c));
@@ -309,6 +331,25 @@ PD_FN pd_real ovl_det(pd_v3 a, pd_v3 b, pd_v3 c)
 PD_FN pd_real ovl_plane_tol(const ovl_ctx *c, pd_real nn)
 {
     return PD_R(2) * c->pad * nn; /* nn: |n| */
+}
+
+/*
+ * The same band for the determinants of two lines, det(da, q, db) = (the lines' distance) x
+ * |da x db| (x = da x db, or db x r for a ray along unit r): 2 pad |x|, so that a line within
+ * 2 pad of another snaps to a tie exactly when a point there would against a plane through it.
+ * Bounds from the edges' max-norms, 2 pad amax(da) amax(db), did not: they snapped lines up to
+ * 2 pad / sin(angle) apart, and a ray cast within 2.2 pad of a cube's edge tied while the corner
+ * it was cast from, 2.05 pad from the face, did not. The cube stacked on another with its side
+ * face 4.3e-14 m from the other's was given 0.509 m^3 of overlap for 6.6e-5
+ * (tests/physics/test_overlap.c, cube_sides_across_the_tie_band). Lines within 14 degrees of
+ * parallel keep a floor of pad |da| |db| / 2, twice the determinant's worst rounding (about
+ * 4 eps |q| |da| |db| with |q| <= 2 sqrt(3) L, pad = 64 eps L): their distance is ill-conditioned
+ * anyway, and a decision outside the bound must still be the exact one.
+ */
+PD_FN pd_real ovl_line_tol(const ovl_ctx *c, pd_v3 x, pd_real dd)
+{
+    /* dd: |da|^2 |db|^2; one square root for both terms */
+    return PD_R(2) * c->pad * PD_SQRT(pd_max(v3_dot(x, x), dd * PD_R(0.0625)));
 }
 
 /*
@@ -363,9 +404,10 @@ PD_FN int ovl_edge_edge(ovl_ctx *c, int ia0, int ia1, int ib0, int ib1)
 {
     pd_v3 a0 = ovl_va(c, ia0), da = v3_sub(ovl_va(c, ia1), a0);
     pd_v3 b0 = ovl_vb(c, ib0), db = v3_sub(ovl_vb(c, ib1), b0);
-    pd_real tol = PD_R(2) * c->pad * v3_amax(da) * v3_amax(db);
+    pd_v3 g = v3_cross(db, da);
+    pd_real tol = ovl_line_tol(c, g, v3_dot(da, da) * v3_dot(db, db));
     int s = ovl_sign(ovl_det(da, v3_sub(b0, a0), db), tol);
-    return s ? s : ovl_tie(c, v3_cross(db, da));
+    return s ? s : ovl_tie(c, g);
 }
 
 /* Directed edge-edge orientation from canonical evaluation: A edge i->j against B edge k->l. */
@@ -461,8 +503,9 @@ PD_FN int ovl_line_through(ovl_ctx *c, pd_v3 p, pd_v3 r, pd_real sp, const pd_v3
         /* det(r, b0 - q, b1 - q) = det(r, b0 - q, b1 - b0) for q = p + sp eps w: the line's
          * distance from the edge times the edge's length across r; eps term
          * -sp w . ((b1 - b0) x r) */
-        int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), db), PD_R(2) * c->pad * v3_amax(db));
-        if (!sv) sv = ovl_tie(c, v3_scale(v3_cross(db, r), -sp));
+        pd_v3 g = v3_cross(db, r);
+        int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), db), ovl_line_tol(c, g, v3_dot(db, db)));
+        if (!sv) sv = ovl_tie(c, v3_scale(g, -sp));
         sg[e] = k0 < k1 ? sv : -sv;
     }
     return sg[0] != 0 && sg[0] == sg[1] && sg[1] == sg[2];
@@ -598,10 +641,11 @@ PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, PD_GLOBAL const int *tri, PD_GLOBA
         if (!s->built) ovl_strip_build(c, s, tri, kept, nk, vx);
         /* the triangles whose extent along eu, widened by 4 resolutions (as the boxes are by
          * one; the coordinates along eu carry a few ulps of L), holds the ray's: keys from
-         * u - width - m to u + m. ovl_line_through snaps within 2 pad |e| / |e across r| of an
-         * edge e: beyond this margin only for edges within 30 degrees of the ray, where a tie
-         * could fall to a skipped triangle (never seen: with and without the strip and boxes,
-         * 1 920 single-precision pairs of up to 20 000 triangles agree; bench/RESULTS.md) */
+         * u - width - m to u + m. ovl_line_through snaps within 2 pad of an edge (ovl_line_tol),
+         * and within 2 pad / (4 sin(angle)) of one within 14 degrees of the ray: beyond this
+         * margin only for edges within 7 degrees, where a tie could fall to a skipped triangle
+         * (never seen: with and without the strip and boxes, 1 920 single-precision pairs of
+         * up to 20 000 triangles agree; bench/RESULTS.md) */
         pd_real u = v3_dot(p, s->eu), m = PD_R(4) * c->pad;
         k0 = ovl_first_key(s->key, nk, u - s->width - m);
         for (k1 = k0; k1 < nk && s->key[k1] <= u + m; k1++)

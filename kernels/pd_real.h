@@ -22,6 +22,7 @@
 #define PD_FN static inline
 #define PD_SQRT(x) sqrt(x)
 #define PD_FABS(x) fabs(x)
+#define PD_FLOOR(x) floor(x)
 #else
 #include <math.h>
 #define PD_GLOBAL
@@ -34,9 +35,11 @@
 #if PD_DOUBLE
 #define PD_SQRT(x) sqrt(x)
 #define PD_FABS(x) fabs(x)
+#define PD_FLOOR(x) floor(x)
 #else
 #define PD_SQRT(x) sqrtf(x)
 #define PD_FABS(x) fabsf(x)
+#define PD_FLOOR(x) floorf(x)
 #endif
 #endif
 

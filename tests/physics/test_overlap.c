@@ -573,6 +573,80 @@ TEST(stacked_cubes_with_coplanar_sides)
 }
 
 /*
+ * Two axis-aligned unit cubes, B on A's top face sunk by s, shifted by `off` along x and by
+ * delta along y, so that their y faces lie delta apart: the overlap is the box
+ * (1 - off) x (1 - |delta|) x s, with its centroid at (off / 2, delta / 2, 0.5 - s / 2). delta is
+ * swept across the predicates' tie band (2 resolutions, about 4e-14 m here) and its edges, where
+ * each predicate snaps to a tie or not on its own: every one must measure the same distance
+ * against the same band, or some see the faces coplanar and others apart (the cube of a
+ * simulation's lattice was given 0.509 m^3 for 6.6e-5, or nothing). The snap may move a face by
+ * the band, so the volume is exact to the band times the faces' size: 1e-9 relative is far
+ * above that and far below a lost or extra piece. The normal's y part (A's side face inside B)
+ * changes sign with delta and may take either sign, or vanish, inside the band.
+ */
+TEST(cube_sides_across_the_tie_band)
+{
+    pd_mesh *c = builtin("cube", 0);
+    static const double offs[3] = {0.1, 0.46469170949068306, 0.7};
+    static const double sinks[2] = {1.2301584082445e-4, 1.7e-3};
+    /* the pair as given, and turned 0.7 rad about (1, 2, 3) 10 m from the origin (the
+     * transforms add rounding of 1e-15 m to every offset) */
+    double qr[4] = {cos(0.35), sin(0.35) / sqrt(14), 2 * sin(0.35) / sqrt(14),
+                    3 * sin(0.35) / sqrt(14)};
+    double x0[3] = {10, -3, 2}, origin[3] = {0, 0, 0};
+    int bad = 0;
+    for (int frame = 0; frame < 2 && !bad; frame++) {
+        const double *q = frame ? qr : ORIGIN.q, *x = frame ? x0 : origin;
+        for (int io = 0; io < 3 && !bad; io++) {
+            for (int is = 0; is < 2 && !bad; is++) {
+                for (int k = -100; k <= 100 && !bad; k++) {
+                    double off = offs[io], s = sinks[is], delta = k * 1e-15;
+                    double rel[3] = {off, delta, 1 - s}, xb[3];
+                    place(q, x, rel, xb);
+                    pd_pose pa = pose(x[0], x[1], x[2], q[0], q[1], q[2], q[3]);
+                    pd_pose pb = pose(xb[0], xb[1], xb[2], q[0], q[1], q[2], q[3]);
+                    /* in A's frame: A's top face (area (1 - off)(1 - |delta|)) and its x side
+                     * (s (1 - |delta|)) inside B, and its y side (s (1 - off)) on one side of
+                     * the band */
+                    double v = (1 - off) * (1 - fabs(delta)) * s;
+                    double ctr[3] = {off / 2, delta / 2, 0.5 - s / 2};
+                    double nz = (1 - off) * (1 - fabs(delta)), nx = s * (1 - fabs(delta));
+                    double ny = s * (1 - off), nn = sqrt(nx * nx + nz * nz);
+                    for (int flags = 0; flags < 2 && !bad; flags++) {
+                        pd_contact o = overlap(c, pa, c, pb, flags ? PD_OVERLAP_NO_FILTER : 0);
+                        double lc[3], ln[3], R[3][3];
+                        pd_quat_to_matrix(q, R);
+                        for (int i = 0; i < 3; i++) { /* back to A's frame */
+                            lc[i] = ln[i] = 0;
+                            for (int j = 0; j < 3; j++) {
+                                lc[i] += R[j][i] * (o.centroid[j] - x[j]);
+                                ln[i] += R[j][i] * o.normal[j];
+                            }
+                        }
+                        CHECK(o.hit);
+                        CHECK_NEAR(v, o.volume, 1e-9 * v);
+                        CHECK_VEC(ctr[0], ctr[1], ctr[2], lc, 1e-9);
+                        CHECK(fabs(ln[1]) <= ny / nn * (1 + 1e-9));
+                        double ry = ln[1] / (ny / sqrt(nn * nn + ny * ny));
+                        if (fabs(delta) > 1e-13) CHECK_NEAR(delta > 0 ? 1 : -1, ry, 1e-6);
+                        double m = sqrt(1 - ln[1] * ln[1]);
+                        CHECK_NEAR(nx / nn * m, ln[0], 1e-9);
+                        CHECK_NEAR(nz / nn * m, ln[2], 1e-9);
+                        if (test_cur_failed_) {
+                            printf("  frame %d, off %.17g, sink %g, delta %g, filter %s: volume "
+                                   "%.17g\n",
+                                   frame, off, s, delta, flags ? "off" : "on", o.volume);
+                            bad = 1;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    pd_mesh_destroy(c);
+}
+
+/*
  * Contacts of many triangles take the sorted paths (OVL_STRIP_MIN in kernels/overlap_predicates.h):
  * ray casts through the strip of kept triangles along eu, the pair loop's sweep over B's boxes.
  * Both only skip work, so they must reproduce the unfiltered computation, which takes neither,
@@ -1076,6 +1150,7 @@ int main(void)
     RUN(invariant_under_common_rigid_motion_even_1e3_m_away);
     RUN(filter_on_and_off_agree);
     RUN(stacked_cubes_with_coplanar_sides);
+    RUN(cube_sides_across_the_tie_band);
     RUN(sorted_casts_and_sweep_agree_with_the_unfiltered_overlap);
     RUN(schonhardt_pairs_match_tetrahedral_reference);
     RUN(rock_pairs_match_tetrahedral_reference);
