@@ -334,22 +334,36 @@ PD_FN pd_real ovl_plane_tol(const ovl_ctx *c, pd_real nn)
 }
 
 /*
- * The same band for the determinants of two lines, det(da, q, db) = (the lines' distance) x
- * |da x db| (x = da x db, or db x r for a ray along unit r): 2 pad |x|, so that a line within
- * 2 pad of another snaps to a tie exactly when a point there would against a plane through it.
- * Bounds from the edges' max-norms, 2 pad amax(da) amax(db), did not: they snapped lines up to
- * 2 pad / sin(angle) apart, and a ray cast within 2.2 pad of a cube's edge tied while the corner
- * it was cast from, 2.05 pad from the face, did not. The cube stacked on another with its side
- * face 4.3e-14 m from the other's was given 0.509 m^3 of overlap for 6.6e-5
- * (tests/physics/test_overlap.c, cube_sides_across_the_tie_band). Lines within 14 degrees of
- * parallel keep a floor of pad |da| |db| / 2, twice the determinant's worst rounding (about
- * 4 eps |q| |da| |db| with |q| <= 2 sqrt(3) L, pad = 64 eps L): their distance is ill-conditioned
- * anyway, and a decision outside the bound must still be the exact one.
+ * The bands of the determinants of two lines, det(da, q, db) = (the lines' distance) x |da x db|
+ * (x = da x db, or db x r for a ray along unit r). A band of 2 pad |x| snaps a line within 2 pad
+ * of another to a tie exactly when a point there would against a plane through it.
+ *
+ * Rays (ovl_ray_tol): 2 pad |db x r|. The edges' max-norm bound 2 pad amax(db) snapped rays up to
+ * 2 pad / sin(angle) from an edge: a ray cast within 2.2 pad of a cube's edge tied while the
+ * corner it was cast from, 2.05 pad from the face, did not, and a cube stacked on another with its
+ * side face 4.3e-14 m from the other's was given 0.509 m^3 of overlap for 6.6e-5
+ * (tests/physics/test_overlap.c, cube_sides_across_the_tie_band). Edges within 14 degrees of the
+ * ray keep a floor of pad |db| / 2, twice the determinant's worst rounding (about 4 eps |q| |db|
+ * with |q| <= 2 sqrt(3) L, pad = 64 eps L): a decision outside the bound must be the exact one.
+ *
+ * Edges (ovl_edge_tol): 2 pad max(|da x db|, amax(da) amax(db)), the larger of that band and the
+ * max-norm bound, never below the latter. Nearly parallel edges, as those of cubes stacked in a
+ * column and turned against each other by rounding, must keep snapping as generously as before:
+ * with the rays' floor instead, a 4 x 4 x 4 lattice of 2 cm cubes dropped onto each other
+ * (bench/RESULTS.md, 2026-12-05) got an overlap of 1.7 % of a size at the first impacts and kept
+ * gaining kinetic energy (8e-4 J after 0.4 s against 2e-5 J), the columns toppled. That distance
+ * is ill-conditioned, and with the edges' ends snapped onto each other's planes only a tie keeps
+ * the two kinds of predicate describing one geometry.
  */
-PD_FN pd_real ovl_line_tol(const ovl_ctx *c, pd_v3 x, pd_real dd)
+PD_FN pd_real ovl_ray_tol(const ovl_ctx *c, pd_v3 x, pd_real db2)
 {
-    /* dd: |da|^2 |db|^2; one square root for both terms */
-    return PD_R(2) * c->pad * PD_SQRT(pd_max(v3_dot(x, x), dd * PD_R(0.0625)));
+    /* db2: |db|^2; one square root for both terms */
+    return PD_R(2) * c->pad * PD_SQRT(pd_max(v3_dot(x, x), db2 * PD_R(0.0625)));
+}
+
+PD_FN pd_real ovl_edge_tol(const ovl_ctx *c, pd_v3 x, pd_v3 da, pd_v3 db)
+{
+    return PD_R(2) * c->pad * pd_max(v3_norm(x), v3_amax(da) * v3_amax(db));
 }
 
 /*
@@ -405,7 +419,7 @@ PD_FN int ovl_edge_edge(ovl_ctx *c, int ia0, int ia1, int ib0, int ib1)
     pd_v3 a0 = ovl_va(c, ia0), da = v3_sub(ovl_va(c, ia1), a0);
     pd_v3 b0 = ovl_vb(c, ib0), db = v3_sub(ovl_vb(c, ib1), b0);
     pd_v3 g = v3_cross(db, da);
-    pd_real tol = ovl_line_tol(c, g, v3_dot(da, da) * v3_dot(db, db));
+    pd_real tol = ovl_edge_tol(c, g, da, db);
     int s = ovl_sign(ovl_det(da, v3_sub(b0, a0), db), tol);
     return s ? s : ovl_tie(c, g);
 }
@@ -504,7 +518,7 @@ PD_FN int ovl_line_through(ovl_ctx *c, pd_v3 p, pd_v3 r, pd_real sp, const pd_v3
          * distance from the edge times the edge's length across r; eps term
          * -sp w . ((b1 - b0) x r) */
         pd_v3 g = v3_cross(db, r);
-        int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), db), ovl_line_tol(c, g, v3_dot(db, db)));
+        int sv = ovl_sign(ovl_det(r, v3_sub(b0, p), db), ovl_ray_tol(c, g, v3_dot(db, db)));
         if (!sv) sv = ovl_tie(c, v3_scale(g, -sp));
         sg[e] = k0 < k1 ? sv : -sv;
     }
@@ -641,7 +655,7 @@ PD_FN int ovl_ray_parity(ovl_ctx *c, pd_v3 p, PD_GLOBAL const int *tri, PD_GLOBA
         if (!s->built) ovl_strip_build(c, s, tri, kept, nk, vx);
         /* the triangles whose extent along eu, widened by 4 resolutions (as the boxes are by
          * one; the coordinates along eu carry a few ulps of L), holds the ray's: keys from
-         * u - width - m to u + m. ovl_line_through snaps within 2 pad of an edge (ovl_line_tol),
+         * u - width - m to u + m. ovl_line_through snaps within 2 pad of an edge (ovl_ray_tol),
          * and within 2 pad / (4 sin(angle)) of one within 14 degrees of the ray: beyond this
          * margin only for edges within 7 degrees, where a tie could fall to a skipped triangle
          * (never seen: with and without the strip and boxes, 1 920 single-precision pairs of
