@@ -25,7 +25,8 @@
  * the sum over the places of sqrt(V_k d_k)).
  *
  * --list prints each touching pair: particles, volume (m^3), depth (m), area (m^2), rho, the
- * single-precision volume (0: missed), places and the effective depth (m).
+ * single-precision volume (0: missed), places, the effective depth (m), and the normal and the
+ * centroid in the first particle's frame (its centroid at the origin).
  *
  * usage: build/bench/contacts RESULT.h5 [--frame K] [--reps N] [--list]   (K: default the last)
  */
@@ -413,9 +414,12 @@ int main(int argc, char **argv)
         double r = o->depth * o->area / o->volume, fv = sqrt(o->volume * o->depth);
         if (list)
             printf("pair %d %d: volume %.6g m^3, depth %.6g m, area %.6g m^2, rho %.4g, single "
-                   "volume %.6g m^3, places %d, effective depth %.6g m\n",
+                   "volume %.6g m^3, places %d, effective depth %.6g m, normal (%.6g, %.6g, %.6g) "
+                   "and centroid (%.6g, %.6g, %.6g) m in the first's frame%s\n",
                    pair[2 * p], pair[2 * p + 1], o->volume, o->depth, o->area, r,
-                   s32.hit ? s32.volume : 0, pl[p].places, pl[p].depth_eff);
+                   s32.hit ? s32.volume : 0, pl[p].places, pl[p].depth_eff, o->normal.x,
+                   o->normal.y, o->normal.z, o->centroid.x, o->centroid.y, o->centroid.z,
+                   o->degenerate ? ", degenerate" : "");
         rho_eff[nr] = pl[p].depth_eff * o->area / o->volume;
         rho[nr++] = r;
         force += fv;

@@ -732,6 +732,7 @@ PD_FN void ovl_out_store(PD_GLOBAL pd_real *r, const ovl_out *o)
 typedef struct ovl_sums {
     pd_real vol, vol_abs, smag; /* smag: the sum of |area| its terms came from */
     pd_v3 mom, sdiff;           /* mom about A's frame origin */
+    pd_real open;               /* the larger |area_a + area_b| of the passes (ovl_compute_try) */
 } ovl_sums;
 
 /* Sums the cusps about c->origin (c->flip must be 0; c->degenerate is set by the first pass). */
@@ -743,6 +744,7 @@ PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
     s->mom = c->moment;
     s->sdiff = v3_sub(c->area_a, c->area_b);
     s->smag = c->area_abs;
+    s->open = v3_norm(v3_add(c->area_a, c->area_b));
     if (c->degenerate) {
         /* coplanar faces may have been owned by one side only: repeat with -w and average */
         int store = c->store_pts;
@@ -750,6 +752,7 @@ PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
         c->store_pts = 0;
         ovl_pass(c);
         pd_v3 s2 = v3_sub(c->area_a, c->area_b);
+        s->open = pd_max(s->open, v3_norm(v3_add(c->area_a, c->area_b)));
         s->vol = PD_R(0.5) * (s->vol + c->vol);
         s->vol_abs = pd_max(s->vol_abs, c->vol_abs);
         s->mom = v3_scale(v3_add(s->mom, c->moment), PD_R(0.5));
@@ -1014,9 +1017,14 @@ PD_FN void ovl_rescue(ovl_ctx *c, ovl_sums *sm)
     c->places = places;
 }
 
-/* The overlap of A and B: volume, centroid, normal and depth (section 4.2). */
-PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
+/*
+ * One evaluation of the overlap (ovl_compute). Returns 0 when the predicates were found to
+ * disagree about the geometry (the overlap's surface does not close), 1 otherwise; *pad: the
+ * resolution it worked at.
+ */
+PD_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out)
 {
+    *pad_out = PD_R(0);
     ovl_ctx cx;
     ovl_ctx *c = &cx;
     c->in = in;
@@ -1116,7 +1124,7 @@ refilter:
     if (open_b) c->e2 = -PD_REAL_MAX;
     if (c->filter && !(c->e1 > c->e2)) { /* half-planes disjoint: no volume */
         ovl_miss(o, c);
-        return;
+        return 1;
     }
     /* A triangle is kept from its first corner that reaches into the other's half-plane, so
      * each is listed once; the lists are sorted so that the cusps are summed in the same order
@@ -1165,7 +1173,7 @@ refilter:
     }
     if (c->ka == 0 || c->kb == 0) {
         ovl_miss(o, c);
-        return;
+        return 1;
     }
     /* B's vertex states, before the transforms mark theirs READY: only the kept triangles'
      * corners are ever looked at (A's are cleared by each pass) */
@@ -1232,7 +1240,7 @@ refilter:
     if (c->filter &&
         (c->box_lo.x > c->box_hi.x || c->box_lo.y > c->box_hi.y || c->box_lo.z > c->box_hi.z)) {
         ovl_miss(o, c);
-        return;
+        return 1;
     }
     for (int k = 0; k < c->ka; k++) {
         int t = c->kept_a[k];
@@ -1327,7 +1335,7 @@ refilter:
     /* touching, or round-off of a touching contact: within 100 ulps of the cusps' magnitudes */
     if (!(vol > PD_R(100) * PD_EPS * sm.vol_abs)) {
         ovl_miss(o, c);
-        return;
+        return 1;
     }
     /*
      * A n B is a polyhedron whose corners are the nodes, so it lies in their box. A volume beyond
@@ -1341,9 +1349,19 @@ refilter:
         pd_v3 ext = v3_sub(nhi, nlo);
         if (vol > ext.x * ext.y * ext.z + PD_R(1000) * PD_EPS * sm.vol_abs) {
             ovl_miss(o, c);
-            return;
+            return 1;
         }
     }
+    *pad_out = c->pad;
+    /*
+     * The overlap's surface is A's faces inside B and B's faces inside A, and a closed surface's
+     * area vectors sum to 0: area_a = -area_b, to the sums' rounding. Where they do not, the
+     * predicates described two different geometries (ties broken one way by some and decided by
+     * the coordinates in others: faces near-coplanar in two directions at once, each just inside
+     * the tie band; bench/degenerate), and the cusps' sums are no overlap at all: in a lattice of
+     * stacked cubes one contact 1.2e-7 m deep got its centroid 34 m away and a depth of 1 mm.
+     */
+    int closed = !(sm.open > PD_R(1e4) * PD_EPS * smag);
     o->hit = 1;
     o->degenerate = degenerate;
     o->kept_a = c->na;
@@ -1379,6 +1397,37 @@ refilter:
     }
     o->depth = c->hi > c->lo ? c->hi - c->lo : PD_R(0);
     ovl_places(c, o, sm.vol_abs);
+    return closed;
+}
+
+/*
+ * The overlap of A and B: volume, centroid, normal and depth (section 4.2). Where the
+ * predicates disagree (ovl_compute_try), B is moved by 8 resolutions along one of three fixed
+ * directions of unrelated components and the overlap taken again: offsets that lay at the edge
+ * of the tie band (2 resolutions) are then either well inside it or well out of it, and 8
+ * resolutions (5e-16 m for 2 cm particles) change no force measurably. Where none of three
+ * agrees, the pair counts as not touching this step, as the volume guard above does.
+ */
+PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
+{
+    pd_real pad = PD_R(0);
+    if (ovl_compute_try(in, o, &pad)) return;
+    const pd_real dir[9] = {PD_R(0.5377), PD_R(0.7183), PD_R(0.4412),  PD_R(-0.6626), PD_R(0.2361),
+                            PD_R(0.7107), PD_R(0.3119), PD_R(-0.8231), PD_R(0.4745)};
+    ovl_in sh = *in;
+    for (int k = 0; k < 3; k++) {
+        pd_real m = PD_R(8) * pad;
+        pd_v3 u = v3(m * dir[3 * k], m * dir[3 * k + 1], m * dir[3 * k + 2]);
+        sh.tr[0] = in->tr[0] + u.x;
+        sh.tr[1] = in->tr[1] + u.y;
+        sh.tr[2] = in->tr[2] + u.z;
+        sh.cb = v3_add(in->cb, u);
+        if (ovl_compute_try(&sh, o, &pad)) return;
+    }
+    o->hit = 0; /* no force from sums the predicates could not agree on */
+    o->volume = o->depth = o->area = o->vol_eff = o->depth_eff = PD_R(0);
+    o->places = 0;
+    o->centroid = o->normal = o->point_eff = v3(0, 0, 0);
 }
 
 #endif /* PD_OVERLAP_H */

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #define PD_DOUBLE 1
+#include "overlap.h"            /* ovl_compute, for the engine's own path */
 #include "overlap_predicates.h" /* OVL_ORIGIN */
 #include "overlap_run.h"
 #include "polydem.h"
@@ -647,6 +648,69 @@ TEST(cube_sides_across_the_tie_band)
 }
 
 /*
+ * Two 2 cm cubes of a column in a simulated lattice (bench/RESULTS.md, 2026-12-05), 1.1e-6 m
+ * deep, their side faces within rounding of each other's in two directions and turned against
+ * each other by 3e-14 rad: the predicates tied some of the near-coplanar corners and decided
+ * others, and the cusps summed to the right volume with the centroid 1.8 m away and a depth of
+ * 1 mm (the engine's path: kernels/overlap.h without OVL_PLACES, as a contact's first pass), a
+ * force 20 times too large acting 1.8 m off. The overlap is a slab of the top face: its centroid
+ * lies within the faces (to 1e-9 m, far below a lost face's 8e-3 m and far above the slab's
+ * 1e-16 m of tilt), its normal along z and its depth 1.1e-6 m, up to what side faces counted
+ * inside can add (below).
+ */
+TEST(stacked_cubes_turned_by_rounding)
+{
+    /* the engine's cube (builtin:cube, its triangles) at size 0.02 m */
+    const double h = 0.40299798850411739 * 0.02;
+    static const int t[36] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
+                              2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
+    double v[24];
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++)
+            v[3 * i + k] = (i >> k) & 1 ? h : -h;
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    CHECK_EQ_INT(PD_OK, pd_mesh_from_arrays(v, 8, t, 12, "cube", &m, &err));
+    if (!m) return;
+    pd_pose pa = pose(0.097880779486231376, 0.014119220513768948, 0.0081566141984404095, 1,
+                      -2.2006552011452189e-14, -2.1276666313378531e-14, -2.2336635949922225e-26);
+    pd_pose pb = pose(0.097880779486231376, 0.014119220513768621, 0.024275407571551062, 1,
+                      3.4086967609546662e-15, 1.6234128099210543e-15, 1.5515941798291303e-26);
+    double gap = pb.x[2] - pa.x[2] - 2 * h; /* -1.1e-6 m: overlapping */
+    ovl_setup su;
+    CHECK_EQ_INT(PD_OK, ovl_setup_make(m, &pa, m, &pb, 0, &su, &err));
+    int pc = ovl_pts_cap(12, 12);
+    int *iscr =
+        malloc(sizeof(int) * (size_t)(ovl_iscratch_len(12, 12, 8, 8) + ovl_places_ilen(pc)));
+    double *rscr =
+        malloc(sizeof(double) * (size_t)(ovl_rscratch_len(12, 12, 8, 8, pc) + ovl_places_rlen(pc)));
+    if (iscr && rscr) {
+        ovl_in in;
+        ovl_out o;
+        ovl_in_from_setup(&in, &su, su.va, su.vb, 0, iscr, rscr, pc);
+        ovl_compute(&in, &o); /* in A's frame: A's centroid at the origin, A's axes */
+        CHECK(o.hit);
+        CHECK_NEAR(4 * h * h * -gap, o.volume, 1e-6 * 4 * h * h * -gap);
+        double cc[3] = {o.centroid.x, o.centroid.y, o.centroid.z};
+        CHECK_VEC(0, 0, h + gap / 2, cc, 1e-9);
+        /* side faces within rounding of each other's may count as inside: strips of at most
+         * the depth on two sides (2 (2h) d of area against the top's (2h)^2) tilt the normal by
+         * at most sqrt(2) d / h and add at most 2 sqrt(2) h times that to the depth */
+        double d = -gap, tilt = sqrt(o.normal.x * o.normal.x + o.normal.y * o.normal.y);
+        CHECK(o.normal.z > 0 && tilt <= sqrt(2) * d / h);
+        CHECK(o.depth >= d * (1 - 1e-9) && o.depth <= d * (1 + 4 + 1e-9));
+        if (test_cur_failed_)
+            printf("  volume %.6g m^3, centroid (%.6g, %.6g, %.6g) m, normal tilt %.3g, depth "
+                   "%.6g m\n",
+                   o.volume, o.centroid.x, o.centroid.y, o.centroid.z, tilt, o.depth);
+    }
+    free(iscr);
+    free(rscr);
+    ovl_setup_free(&su);
+    pd_mesh_destroy(m);
+}
+
+/*
  * Contacts of many triangles take the sorted paths (OVL_STRIP_MIN in kernels/overlap_predicates.h):
  * ray casts through the strip of kept triangles along eu, the pair loop's sweep over B's boxes.
  * Both only skip work, so they must reproduce the unfiltered computation, which takes neither,
@@ -1151,6 +1215,7 @@ int main(void)
     RUN(filter_on_and_off_agree);
     RUN(stacked_cubes_with_coplanar_sides);
     RUN(cube_sides_across_the_tie_band);
+    RUN(stacked_cubes_turned_by_rounding);
     RUN(sorted_casts_and_sweep_agree_with_the_unfiltered_overlap);
     RUN(schonhardt_pairs_match_tetrahedral_reference);
     RUN(rock_pairs_match_tetrahedral_reference);
