@@ -36,16 +36,9 @@ static double rnd(void)
 
 static pd_mesh *box(const double lo[3], const double hi[3])
 {
-    static const int t[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                              2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
-    double v[24];
-    for (int i = 0; i < 8; i++)
-        for (int k = 0; k < 3; k++)
-            v[3 * i + k] = (i >> k) & 1 ? hi[k] : lo[k];
     pd_mesh *m = NULL;
     pd_error err = {0};
-    if (pd_mesh_from_arrays(v, 8, t, 12, "box", &m, &err) != PD_OK)
-        fprintf(stderr, "degenerate: box: %s\n", err.msg);
+    if (pd_mesh_box(lo, hi, &m, &err) != PD_OK) fprintf(stderr, "degenerate: box: %s\n", err.msg);
     return m;
 }
 

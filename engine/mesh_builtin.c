@@ -598,3 +598,14 @@ int pd_mesh_builtin(const char *name, int triangles, unsigned seed, pd_mesh **ou
     if (!strcmp(name, "rock")) return make_rock(triangles, seed, out, err);
     return pd_error_set(err, PD_EINVAL, "unknown builtin '%s' (valid: " BUILTIN_NAMES ")", name);
 }
+
+int pd_mesh_box(const double lo[3], const double hi[3], pd_mesh **out, pd_error *err)
+{
+    static const int t[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                              2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    double v[24];
+    for (int i = 0; i < 8; i++)
+        for (int k = 0; k < 3; k++)
+            v[3 * i + k] = (i >> k) & 1 ? hi[k] : lo[k];
+    return pd_mesh_from_arrays(v, 8, t, 12, "box", out, err);
+}

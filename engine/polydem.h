@@ -92,6 +92,10 @@ int pd_mesh_builtin(const char *name, int triangles, unsigned seed, pd_mesh **ou
 int pd_mesh_from_arrays(const double *verts, int nverts, const int *tris, int ntris,
                         const char *label, pd_mesh **out, pd_error *err);
 
+/* The solid box [lo, hi] (every lo[k] < hi[k]) as a closed mesh of 12 triangles, as walls'
+ * "box" are meshed. */
+int pd_mesh_box(const double lo[3], const double hi[3], pd_mesh **out, pd_error *err);
+
 void pd_mesh_destroy(pd_mesh *m);
 
 /* Writes binary STL. */

@@ -929,18 +929,6 @@ static void parse_particles(sc_parse *p, json_t *root)
     }
 }
 
-/* The solid box [lo, hi] as a closed mesh. */
-static int box_mesh(const double lo[3], const double hi[3], pd_mesh **out, pd_error *err)
-{
-    static const int t[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
-                              2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
-    double v[24];
-    for (int i = 0; i < 8; i++)
-        for (int k = 0; k < 3; k++)
-            v[3 * i + k] = (i >> k) & 1 ? hi[k] : lo[k];
-    return pd_mesh_from_arrays(v, 8, t, 12, "box", out, err);
-}
-
 static void parse_walls(sc_parse *p, json_t *root)
 {
     static const char *const keys[] = {"name",     "material",         "box",    "mesh",
@@ -988,7 +976,7 @@ static void parse_walls(sc_parse *p, json_t *root)
                     numvec(p, box, c, "max", 3, NULL, hi)) {
                     if (!(hi[0] > lo[0] && hi[1] > lo[1] && hi[2] > lo[2]))
                         diag(p, c, "max must exceed min on every axis");
-                    else if (box_mesh(lo, hi, &w->mesh, &err) != PD_OK)
+                    else if (pd_mesh_box(lo, hi, &w->mesh, &err) != PD_OK)
                         diag(p, c, "%s", err.msg);
                 }
             }
