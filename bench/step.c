@@ -36,6 +36,7 @@
 static int traversal;      /* also time DFS against BFS traversal */
 static int no_skin;        /* build the pair list every step (no Verlet skin) */
 static int places;         /* "contact_places": "separate" */
+static int no_moments;     /* "contact_moments": false (the thesis's point contact) */
 static int wall_grid;      /* 0: a box floor */
 static char wall_path[64]; /* the meshed floor, when wall_grid */
 
@@ -79,15 +80,17 @@ static void scenario(char *json, size_t len, long n, int spheres, int dbl)
              " \"w\": {\"density\": 7800, \"youngs_modulus\": 1e9, \"poisson_ratio\": 0.25, "
              "\"shear_modulus\": 1e9}},"
              " \"interactions\": [{\"between\": [\"p\", \"p\"], \"friction\": 0.39, \"damping\": "
-             "0.453619, \"contact_places\": \"%s\"}, {\"between\": [\"p\", \"w\"], \"friction\": "
-             "0.35, \"damping\": 0.382097, \"contact_places\": \"%s\"}],"
+             "0.453619, \"contact_places\": \"%s\", \"contact_moments\": %s}, {\"between\": "
+             "[\"p\", \"w\"], \"friction\": 0.35, \"damping\": 0.382097, \"contact_places\": "
+             "\"%s\", \"contact_moments\": %s}],"
              " \"shapes\": {\"s\": %s},"
              " \"particles\": [{\"shape\": \"s\", \"material\": \"p\", \"count\": %ld, \"size\": "
              "%g, \"region\": {\"min\": [0, 0, 0.001], \"max\": [%.9g, %.9g, %.9g]}, "
              "\"orientation\": \"random\", \"velocity\": [0, 0, -1]}],"
              " \"walls\": [{\"name\": \"floor\", \"material\": \"w\", %s}]}",
              dbl ? "double" : "single", places ? "separate" : "merged",
-             places ? "separate" : "merged",
+             no_moments ? "false" : "true", places ? "separate" : "merged",
+             no_moments ? "false" : "true",
              spheres ? "{\"sphere\": {}}" : "{\"builtin\": \"schonhardt\"}", n, size, w, w,
              0.001 + h, floor);
 }
@@ -403,6 +406,8 @@ int main(int argc, char **argv)
             dbl = 0;
         } else if (!strcmp(argv[i], "--places")) {
             places = 1;
+        } else if (!strcmp(argv[i], "--no-moments")) {
+            no_moments = 1;
         } else if (!strcmp(argv[i], "--no-skin")) {
             no_skin = 1;
         } else if (!strcmp(argv[i], "--traversal")) {
@@ -413,7 +418,7 @@ int main(int argc, char **argv)
             fprintf(stderr,
                     "usage: %s [--quick] [--sizes N,N] [--spheres N] [--settle S] "
                     "[--steps S] [--device N] [--single] [--wall-grid G] [--traversal] [--no-skin] "
-                    "[--places]\n",
+                    "[--places] [--no-moments]\n",
                     argv[0]);
             return 2;
         }

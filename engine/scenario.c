@@ -449,6 +449,7 @@ static void parse_interactions(sc_parse *p, json_t *root)
                                        "tangential_stiffness",
                                        "damping_coefficient",
                                        "contact_places",
+                                       "contact_moments",
                                        NULL};
     pd_scenario *s = p->s;
     json_t *a = arr(p, root, "", "interactions");
@@ -505,6 +506,13 @@ static void parse_interactions(sc_parse *p, json_t *root)
                  "\"separate\" is for \"model\": \"hertz_mindlin\" (the linear model's "
                  "force is not a function of volume and depth)");
         }
+        json_t *tw = json_object_get(v, "contact_moments");
+        child(c, sizeof c, at, "contact_moments");
+        if (tw && !json_is_boolean(tw))
+            diag(p, c, "must be true or false");
+        else if (json_is_true(tw) && x.model == SC_MODEL_LINEAR)
+            diag(p, c, "is for \"model\": \"hertz_mindlin\" (polyhedra's volumetric contacts)");
+        x.contact_moments = x.model == SC_MODEL_HERTZ_MINDLIN && !json_is_false(tw);
         x.friction = num(p, v, at, "friction", 0, 0.5, NONNEG, "");
         x.damping = num(p, v, at, "damping", 0, 0, NONNEG, "");
         x.cohesion = num(p, v, at, "cohesion", 0, 0, NONNEG, "N/m");

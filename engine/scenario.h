@@ -26,6 +26,7 @@ typedef struct sc_interaction {
     double friction, damping, cohesion, cohesion_range;
     double normal_stiffness, tangential_stiffness, damping_coefficient; /* linear model only */
     int separate_places; /* "contact_places": "separate" (thesis 5.4; kernels/overlap.h) */
+    int contact_moments; /* "contact_moments" (kernels/contact_pair.h, cp_couple) */
 } sc_interaction;
 
 enum { SC_SHAPE_MESH = 0, SC_SHAPE_SPHERE = 1 };

@@ -36,6 +36,7 @@ enum { SIM_INTEGRATE, SIM_BVH, SIM_TRAVERSE, SIM_CONTACTS, SIM_GATHER, SIM_NSTAG
 typedef struct sim_pairs {
     cl_mem keys, spring, kt;
     cl_mem point; /* last step's contact point (world): the next overlap's origin */
+    cl_mem twist; /* the twisting spring's moment, N m (kernels/contact_force.h, cf_twist) */
     size_t cap;   /* capacity in pairs */
 } sim_pairs;
 
@@ -44,7 +45,10 @@ typedef struct sim {
     const pd_scenario *s;
     int dbl;    /* double precision on the device */
     int places; /* an interaction asks for separate places: the CL_PLACES build, its scratch */
-    size_t rs;  /* sizeof(pd_real) on the device */
+    /* some polyhedral pair has "contact_moments": the pair arrays carry twist and couple (NULL
+     * buffers otherwise, which the kernels test for: 4 reals a pair slot saved) */
+    int moments;
+    size_t rs; /* sizeof(pd_real) on the device */
     int n, nwall, nbody, nmat, nshape;
     double dt;
     long long step;
@@ -110,7 +114,7 @@ typedef struct sim {
      */
     sim_pairs pairs, carry;
     int npairs;
-    cl_mem force, info, second_list;
+    cl_mem force, couple, info, second_list; /* couple: the twisting moment on the second body */
     cl_mem second_count, second_off; /* per particle: contacts as second body, their offsets */
     size_t work_cap;                 /* capacity of the per-pair work arrays above */
     /* overlap scratch, per contact work-item */

@@ -471,6 +471,13 @@ static int upload_params(sim *m, pd_error *err)
             p[CP_KF] = in->tangential_stiffness;
             p[CP_ETA] = in->damping_coefficient;
             p[CP_PLACES] = in->separate_places;
+            /* the contact's moments (contact_pair.h, cp_couple); the twisting spring's
+             * modulus: the two bodies' shear compliances in series */
+            if (in->contact_moments) {
+                p[CP_GTWIST] = 1 / (1 / ma->shear_modulus + 1 / mb->shear_modulus);
+                for (int k = 0; k < s->nshape; k++)
+                    m->moments |= s->shape[k].kind == SC_SHAPE_MESH;
+            }
             if (in->cohesion > 0 && 0.5 * in->cohesion_range > m->margin)
                 m->margin = 0.5 * in->cohesion_range;
         }
@@ -835,11 +842,14 @@ void sim_destroy(sim *m)
                       &m->pairs.spring,
                       &m->pairs.kt,
                       &m->pairs.point,
+                      &m->pairs.twist,
                       &m->carry.keys,
                       &m->carry.spring,
                       &m->carry.kt,
                       &m->carry.point,
+                      &m->carry.twist,
                       &m->force,
+                      &m->couple,
                       &m->info,
                       &m->second_list,
                       &m->second_count,

@@ -62,12 +62,13 @@ static int grow_pairs(sim *m, sim_pairs *p, size_t need, const char *what, pd_er
     size_t cap = pair_capacity(need);
     cl_int e = CL_SUCCESS;
     cl_context ctx = m->dev->ctx;
-    m->bytes += (double)(cap - p->cap) * (sizeof(cl_ulong) + 7 * m->rs);
+    m->bytes += (double)(cap - p->cap) * (sizeof(cl_ulong) + (m->moments ? 8 : 7) * m->rs);
     if (p->keys) clReleaseMemObject(p->keys);
     if (p->spring) clReleaseMemObject(p->spring);
     if (p->kt) clReleaseMemObject(p->kt);
     if (p->point) clReleaseMemObject(p->point);
-    p->keys = p->spring = p->kt = p->point = NULL;
+    if (p->twist) clReleaseMemObject(p->twist);
+    p->keys = p->spring = p->kt = p->point = p->twist = NULL;
     p->cap = 0;
     p->keys = clCreateBuffer(ctx, CL_MEM_READ_WRITE, sizeof(cl_ulong) * cap, NULL, &e);
     if (e == CL_SUCCESS)
@@ -75,6 +76,8 @@ static int grow_pairs(sim *m, sim_pairs *p, size_t need, const char *what, pd_er
     if (e == CL_SUCCESS) p->kt = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * cap, NULL, &e);
     if (e == CL_SUCCESS)
         p->point = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * 3 * cap, NULL, &e);
+    if (e == CL_SUCCESS && m->moments)
+        p->twist = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * cap, NULL, &e);
     if (e != CL_SUCCESS) return CL_FAIL(err, what, e);
     p->cap = cap;
     return PD_OK;
@@ -90,15 +93,17 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     if (rc != PD_OK) return rc;
     if (need > m->work_cap || !m->force) {
         size_t cap = pair_capacity(need);
-        cl_mem *b[] = {&m->force, &m->info, &m->second_list};
-        size_t sz[] = {m->rs * 3, sizeof(float), sizeof(int)}; /* info: floats */
-        m->bytes += (double)(cap - m->work_cap) * (3 * m->rs + sizeof(float) + sizeof(int));
+        cl_mem *b[] = {&m->force, &m->info, &m->second_list, &m->couple};
+        size_t sz[] = {m->rs * 3, sizeof(float), sizeof(int), m->rs * 3}; /* info: floats */
+        size_t nb = m->moments ? 4 : 3; /* the couples only with contact moments */
+        m->bytes += (double)(cap - m->work_cap) *
+                    ((m->moments ? 6 : 3) * m->rs + sizeof(float) + sizeof(int));
         m->work_cap = 0;
         for (size_t i = 0; i < sizeof b / sizeof b[0]; i++) {
             if (*b[i]) clReleaseMemObject(*b[i]);
             *b[i] = NULL;
         }
-        for (size_t i = 0; i < sizeof b / sizeof b[0] && e == CL_SUCCESS; i++)
+        for (size_t i = 0; i < nb && e == CL_SUCCESS; i++)
             *b[i] = clCreateBuffer(ctx, CL_MEM_READ_WRITE, sz[i] * cap, NULL, &e);
         if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateBuffer(contact work)", e);
         m->work_cap = cap;
@@ -163,8 +168,9 @@ static int keep_history(sim *m, pd_error *err)
     e |= CL_ARG(k, 0, m->offset);
     e |= CL_ARG(k, 1, m->pairs.spring);
     e |= CL_ARG(k, 2, m->pairs.kt);
-    e |= CL_ARG(k, 3, n);
-    e |= CL_ARG(k, 4, m->count);
+    e |= CL_ARG(k, 3, m->pairs.twist);
+    e |= CL_ARG(k, 4, n);
+    e |= CL_ARG(k, 5, m->count);
     if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "history_count");
     if ((rc = cl_launch(dev, k, (size_t)n, "history_count", err)) != PD_OK) return rc;
     if ((rc = dsort_scan(&m->sort, m->count, n, m->carry_offset, err)) != PD_OK) return rc;
@@ -180,12 +186,14 @@ static int keep_history(sim *m, pd_error *err)
     e |= CL_ARG(k, 2, m->pairs.spring);
     e |= CL_ARG(k, 3, m->pairs.kt);
     e |= CL_ARG(k, 4, m->pairs.point);
-    e |= CL_ARG(k, 5, n);
-    e |= CL_ARG(k, 6, m->carry_offset);
-    e |= CL_ARG(k, 7, m->carry.keys);
-    e |= CL_ARG(k, 8, m->carry.spring);
-    e |= CL_ARG(k, 9, m->carry.kt);
-    e |= CL_ARG(k, 10, m->carry.point);
+    e |= CL_ARG(k, 5, m->pairs.twist);
+    e |= CL_ARG(k, 6, n);
+    e |= CL_ARG(k, 7, m->carry_offset);
+    e |= CL_ARG(k, 8, m->carry.keys);
+    e |= CL_ARG(k, 9, m->carry.spring);
+    e |= CL_ARG(k, 10, m->carry.kt);
+    e |= CL_ARG(k, 11, m->carry.point);
+    e |= CL_ARG(k, 12, m->carry.twist);
     if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "history_keep");
     if ((rc = cl_launch(dev, k, (size_t)n, "history_keep", err)) != PD_OK) return rc;
     return PD_OK;
@@ -339,6 +347,7 @@ static int contacts(sim *m, pd_error *err)
     e |= CL_ARG(k, a++, m->carry.spring);
     e |= CL_ARG(k, a++, m->carry.kt);
     e |= CL_ARG(k, a++, m->carry.point);
+    e |= CL_ARG(k, a++, m->carry.twist);
     cl_mem body[] = {m->x,
                      m->q,
                      m->v,
@@ -380,7 +389,8 @@ static int contacts(sim *m, pd_error *err)
     /* surfaces' gaps (cp_mesh_gap) certified up to the skin, a list's reach */
     e |= arg_real(m, k, a++, m->skin);
     e |= arg_real(m, k, a++, m->list_life);
-    cl_mem outs[] = {m->force, m->pairs.point, m->pairs.spring, m->pairs.kt, m->info};
+    cl_mem outs[] = {m->force,    m->pairs.point, m->couple, m->pairs.spring,
+                     m->pairs.kt, m->pairs.twist, m->info};
     for (size_t i = 0; i < sizeof outs / sizeof outs[0]; i++)
         e |= CL_ARG(k, a++, outs[i]);
     if (e != CL_SUCCESS) return CL_ARG_FAIL(err, "contact_forces");
@@ -430,6 +440,7 @@ static int gather(sim *m, pd_error *err)
     e |= CL_ARG(k, a++, m->second_list);
     e |= CL_ARG(k, a++, m->force);
     e |= CL_ARG(k, a++, m->pairs.point);
+    e |= CL_ARG(k, a++, m->couple);
     e |= CL_ARG(k, a++, m->x);
     e |= CL_ARG(k, a++, m->n);
     e |= CL_ARG(k, a++, m->inv_m);

@@ -17,11 +17,12 @@
  * A particle meets a wall's triangles found in the wall's BVH (wall_bvh.h, np_wall_local); a
  * wall-pair work-item's scratch begins with np_wall_ilen/_rlen(wall_cap) for them.
  * Per pair out: force on the second body (3), the contact point (3; kept, as the spring, for the
- * next step's overlap: contact_pair.h, OVL_ORIGIN), the new
- * tangential spring (3) and stiffness (1) (or certificate), and info (1 float in either
- * precision, for statistics): depth / smaller size when the bodies touch, -1 when they do not,
- * -2 when skipped as certified apart, -(3 + k) when apart but too close for a certificate, the
- * surfaces' gap not to be searched for k more steps (CP_GAP_RETRY).
+ * next step's overlap: contact_pair.h, OVL_ORIGIN), the moment on the second body (3), the new
+ * tangential spring (3), stiffness (1) (or certificate) and twist (1), and info (1 float in
+ * either precision, for statistics): depth / smaller size when the bodies touch, -1 when they do
+ * not, -2 when skipped as certified apart, -(3 + k) when apart but too close for a certificate,
+ * the surfaces' gap not to be searched for k more steps (CP_GAP_RETRY). couple and twist (and
+ * carry_twist) are NULL in a run without contact moments (engine/sim.h).
  */
 #include "pd_real.h"
 #include "contact_pair.h"
@@ -38,19 +39,20 @@ __kernel void contact_forces(
     __global const ch_key *keys, int npairs, int fresh, __global const ch_key *carry_keys,
     __global const int *carry_offset, __global const pd_real *carry_spring,
     __global const pd_real *carry_kt, __global const pd_real *carry_point,
-    __global const pd_real *x, __global const pd_real *q, __global const pd_real *v,
-    __global const pd_real *L, __global const pd_real *w_wall, __global const pd_real *size,
-    __global const pd_real *inv_m, __global const int *shape, __global const int *material,
-    __global const pd_real *unit_inertia, __global const pd_real *density,
-    __global const pd_real *vert, __global const int *tri, __global const int *voff,
-    __global const int *toff, __global const int *vt_off, __global const int *vt,
-    __global const int *kind, __global const pd_real *radius_ratio, __global const pd_real *params,
-    int nmat, int nparticles, pd_real dt, __global const pd_real *wnode_box,
-    __global const int *wnode_kid, __global const int *wnode_off, __global const int *wtri_order,
-    int wall_cap, int nwall, __global int *status, __global int *iscr, __global pd_real *rscr,
-    int ilen, int rlen, int pts_cap, int nwork, __global const pd_real *travel, pd_real gap_cap,
-    pd_real list_life, __global pd_real *force, __global pd_real *point, __global pd_real *spring,
-    __global pd_real *kt, __global float *info)
+    __global const pd_real *carry_twist, __global const pd_real *x, __global const pd_real *q,
+    __global const pd_real *v, __global const pd_real *L, __global const pd_real *w_wall,
+    __global const pd_real *size, __global const pd_real *inv_m, __global const int *shape,
+    __global const int *material, __global const pd_real *unit_inertia,
+    __global const pd_real *density, __global const pd_real *vert, __global const int *tri,
+    __global const int *voff, __global const int *toff, __global const int *vt_off,
+    __global const int *vt, __global const int *kind, __global const pd_real *radius_ratio,
+    __global const pd_real *params, int nmat, int nparticles, pd_real dt,
+    __global const pd_real *wnode_box, __global const int *wnode_kid, __global const int *wnode_off,
+    __global const int *wtri_order, int wall_cap, int nwall, __global int *status,
+    __global int *iscr, __global pd_real *rscr, int ilen, int rlen, int pts_cap, int nwork,
+    __global const pd_real *travel, pd_real gap_cap, pd_real list_life, __global pd_real *force,
+    __global pd_real *point, __global pd_real *couple, __global pd_real *spring,
+    __global pd_real *kt, __global pd_real *twist, __global float *info)
 {
     int g = (int)get_global_id(0);
     if (g >= nwork) return;
@@ -102,6 +104,7 @@ __kernel void contact_forces(
             /* certified apart: kt holds -(gap + travel then); they have not moved that far */
             force[3 * c] = force[3 * c + 1] = force[3 * c + 2] = PD_R(0);
             point[3 * c] = point[3 * c + 1] = point[3 * c + 2] = PD_R(0);
+            if (couple) couple[3 * c] = couple[3 * c + 1] = couple[3 * c + 2] = PD_R(0);
             info[c] = -2.0f;
             continue;
         } else if (fresh) {
@@ -111,15 +114,20 @@ __kernel void contact_forces(
             j = j >= 0 ? lo + j : -1;
             pd_v3 s0 = j >= 0 ? v3_load(carry_spring, j) : v3(0, 0, 0),
                   p0 = j >= 0 ? v3_load(carry_point, j) : v3(0, 0, 0);
-            pd_real kt0 = j >= 0 ? carry_kt[j] : PD_R(0);
-            cp_pair(&wd, k, s0, kt0, is, rs, pts_cap, 1, p0, &r);
+            pd_real kt0 = j >= 0 ? carry_kt[j] : PD_R(0),
+                    tw0 = j >= 0 && carry_twist ? carry_twist[j] : PD_R(0);
+            cp_pair(&wd, k, s0, kt0, tw0, is, rs, pts_cap, 1, p0, &r);
         } else { /* kt > 0: it touched in the last step, at point (as carried on a new list) */
-            cp_pair(&wd, k, v3_load(spring, c), pd_max(kt[c], PD_R(0)), is, rs, pts_cap, wait == 0,
-                    v3_load(point, c), &r);
+            cp_pair(&wd, k, v3_load(spring, c), pd_max(kt[c], PD_R(0)), twist ? twist[c] : PD_R(0),
+                    is, rs, pts_cap, wait == 0, v3_load(point, c), &r);
         }
         v3_store(force, c, r.force);
         v3_store(point, c, r.point);
         v3_store(spring, c, r.spring);
+        if (couple) { /* a run with contact moments (engine/sim.h) */
+            v3_store(couple, c, r.couple);
+            twist[c] = r.twist;
+        }
         /* a separated pair keeps its certificate where a touching one keeps its stiffness:
          * -(gap + travel so far), rounded down, valid while the list is (never carried) */
         kt[c] = r.gap > PD_R(0)
@@ -134,32 +142,35 @@ __kernel void contact_forces(
 
 /* Before a new pair list is built: how many of particle p's pairs in the old list carry state. */
 __kernel void history_count(__global const int *offset, __global const pd_real *spring,
-                            __global const pd_real *kt, int n, __global int *count)
+                            __global const pd_real *kt, __global const pd_real *twist, int n,
+                            __global int *count)
 {
     int p = (int)get_global_id(0);
     if (p >= n) return;
     int m = 0;
     for (int c = offset[p]; c < offset[p + 1]; c++)
-        m += ch_has_state(spring, kt, c);
+        m += ch_has_state(spring, kt, twist, c);
     count[p] = m;
 }
 
 /* ... and copies them, in key order, to particle p's segment of the carried pairs. */
 __kernel void history_keep(__global const int *offset, __global const ch_key *keys,
                            __global const pd_real *spring, __global const pd_real *kt,
-                           __global const pd_real *point, int n, __global const int *carry_offset,
-                           __global ch_key *carry_keys, __global pd_real *carry_spring,
-                           __global pd_real *carry_kt, __global pd_real *carry_point)
+                           __global const pd_real *point, __global const pd_real *twist, int n,
+                           __global const int *carry_offset, __global ch_key *carry_keys,
+                           __global pd_real *carry_spring, __global pd_real *carry_kt,
+                           __global pd_real *carry_point, __global pd_real *carry_twist)
 {
     int p = (int)get_global_id(0);
     if (p >= n) return;
     int j = carry_offset[p];
     for (int c = offset[p]; c < offset[p + 1]; c++) {
-        if (!ch_has_state(spring, kt, c)) continue;
+        if (!ch_has_state(spring, kt, twist, c)) continue;
         carry_keys[j] = keys[c];
         v3_store(carry_spring, j, v3_load(spring, c));
         carry_kt[j] = kt[c];
         v3_store(carry_point, j, v3_load(point, c));
+        if (twist) carry_twist[j] = twist[c];
         j++;
     }
 }

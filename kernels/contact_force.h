@@ -10,7 +10,9 @@
  *   - Hertz-Mindlin for analytic spheres (thesis eqs. 4.1, 4.5, 4.7, 4.10),
  *   - the linear spring-dashpot of seed 004 (eq. 2.1) with its friction (eqs. 2.2-2.4),
  *   - the tangential spring with history (thesis eqs. 4.8, 4.9) and the Coulomb limit
- *     (eqs. 4.12, 4.13).
+ *     (eqs. 4.12, 4.13),
+ *   - a twisting spring with history and its Coulomb limit for volumetric contacts (not in the
+ *     thesis; cf_twist below).
  */
 #ifndef PD_CONTACT_FORCE_H
 #define PD_CONTACT_FORCE_H
@@ -132,6 +134,46 @@ PD_FN pd_v3 cf_tangential(pd_v3 *spring, pd_v3 n, pd_real kt, pd_real kt0, int l
     }
     *spring = s;
     return f;
+}
+
+/*
+ * Twisting resistance of a volumetric contact. The thesis's contact is a point: a force at the
+ * overlap's centroid, so a relative spin about the normal through it meets no resistance, and a
+ * cube resting on a face keeps turning at whatever rate an impact left it (2 rad/s for seconds
+ * in examples/cube_lattice.json before this). A real face contact resists it by friction over
+ * its area. Modelled as the tangential spring is (eqs. 4.8-4.13), about n instead of along the
+ * plane, on the circular contact of radius a = sqrt(V / (pi delta)) that eqs. 4.17-4.18 use:
+ *   stiffness  k_tw = 16/3 a^3 G_tw, 1/G_tw = 1/G1 + 1/G2: a disc bonded to two half-spaces and
+ *              turned (Reissner and Sagoci 1944; Lubkin 1951 for spheres in contact),
+ *   limit      M_max = 3 pi / 16 mu F_n a: Coulomb friction under Hertz's pressure, fully sliding
+ *              (integrate mu p(r) r over the disc with p = 3 F_n / (2 pi a^2) sqrt(1 - r^2/a^2)),
+ *   dashpot    eq. 4.12's tangential dashpot spread over the disc (contact_pair.h, cp_couple).
+ *   twist      in/out: the elastic moment carried from the last step, N m (about n, on B)
+ *   ktw, ktw0  the stiffness now and at the last step (the moment shrinks with it on unloading,
+ *              as eq. 4.9 rescales the tangential spring)
+ *   spin       (w_B - w_A) . n, rad/s; dt the step, s; damp the dashpot, N m s
+ *   mlim       M_max, N m
+ * Returns the moment about n on B (A receives minus it).
+ */
+PD_FN pd_real cf_twist(pd_real *twist, pd_real ktw, pd_real ktw0, int loading, pd_real spin,
+                       pd_real dt, pd_real damp, pd_real mlim)
+{
+    pd_real s = *twist;
+    if (!loading && ktw0 > PD_R(0)) s *= ktw / ktw0;
+    s -= ktw * spin * dt;
+    pd_real m = s - damp * spin;
+    if (PD_FABS(m) > mlim) { /* slides at the limit, and the spring with it */
+        m = m > PD_R(0) ? mlim : -mlim;
+        s = m;
+    }
+    *twist = s;
+    return m;
+}
+
+/* k_tw of cf_twist for contact radius a, N m / rad. */
+PD_FN pd_real cf_twist_stiffness(pd_real gtw, pd_real a)
+{
+    return PD_R(16) / PD_R(3) * gtw * a * a * a;
 }
 
 #endif /* PD_CONTACT_FORCE_H */

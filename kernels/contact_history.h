@@ -68,13 +68,15 @@ PD_FN int ch_find(PD_GLOBAL const ch_key *keys, int n, ch_key k)
 
 /*
  * Whether pair c's state is worth carrying to the next pair list: a pair with no tangential
- * spring and no stiffness starts as a new contact would (zero state), so it is not kept; nor is
- * a separated pair's certificate (a negative kt, contact.cl), which holds only while its list does.
+ * spring, no twist and no stiffness starts as a new contact would (zero state), so it is not
+ * kept; nor is a separated pair's certificate (a negative kt, contact.cl), which holds only while
+ * its list does. twist is NULL in a run without contact moments (engine/sim.h).
  */
-PD_FN int ch_has_state(PD_GLOBAL const pd_real *spring, PD_GLOBAL const pd_real *kt, int c)
+PD_FN int ch_has_state(PD_GLOBAL const pd_real *spring, PD_GLOBAL const pd_real *kt,
+                       PD_GLOBAL const pd_real *twist, int c)
 {
     return kt[c] > PD_R(0) || spring[3 * c] != PD_R(0) || spring[3 * c + 1] != PD_R(0) ||
-           spring[3 * c + 2] != PD_R(0);
+           spring[3 * c + 2] != PD_R(0) || (twist && twist[c] != PD_R(0));
 }
 
 /*
@@ -97,19 +99,22 @@ PD_FN void ch_carry(PD_GLOBAL const ch_key *old_keys, int n_old,
  * order). Its contacts as second body are listed, in any order, in second_list[second_off[p] ..
  * second_off[p+1]-1]; the list is sorted here (only p's gather touches it) so they are summed in
  * key order too. Contact c carries force[3c] acting on its second body (the first body gets
- * minus it) at the contact point point[3c]; the torque on p is (point - x_p) x (force on p),
- * with x_p = x[3p] its centre. (Storing the point, not two torques, saves 3 reals per pair.)
+ * minus it) at the contact point point[3c], and a moment couple[3c] on its second body (minus it
+ * on the first: the twisting resistance); the torque on p is (point - x_p) x (force on p) plus
+ * its moment, with x_p = x[3p] its centre (couple NULL: no moments). (Storing the point, not
+ * two torques, saves 3 reals per pair.)
  */
 PD_FN void ch_gather(unsigned p, PD_GLOBAL const int *first, PD_GLOBAL const int *second_off,
                      PD_GLOBAL int *second_list, PD_GLOBAL const pd_real *force,
-                     PD_GLOBAL const pd_real *point, PD_GLOBAL const pd_real *x, pd_v3 *f_out,
-                     pd_v3 *t_out)
+                     PD_GLOBAL const pd_real *point, PD_GLOBAL const pd_real *couple,
+                     PD_GLOBAL const pd_real *x, pd_v3 *f_out, pd_v3 *t_out)
 {
     pd_v3 f = v3(0, 0, 0), t = v3(0, 0, 0), xp = v3_load(x, (int)p);
     for (int c = first[p]; c < first[p + 1]; c++) {
         pd_v3 fc = v3_scale(v3_load(force, c), -1);
         f = v3_add(f, fc);
         t = v3_add(t, v3_cross(v3_sub(v3_load(point, c), xp), fc));
+        if (couple) t = v3_sub(t, v3_load(couple, c));
     }
     PD_GLOBAL int *l = second_list + second_off[p];
     int m = second_off[p + 1] - second_off[p];
@@ -126,6 +131,7 @@ PD_FN void ch_gather(unsigned p, PD_GLOBAL const int *first, PD_GLOBAL const int
         pd_v3 fc = v3_load(force, c);
         f = v3_add(f, fc);
         t = v3_add(t, v3_cross(v3_sub(v3_load(point, c), xp), fc));
+        if (couple) t = v3_add(t, v3_load(couple, c));
     }
     *f_out = f;
     *t_out = t;

@@ -43,6 +43,7 @@ enum {
     CP_KF,        /* linear tangential (friction) stiffness, N/m */
     CP_ETA,       /* linear damping coefficient, N s/m */
     CP_PLACES,    /* 1: "contact_places": "separate" (OVL_PLACES) */
+    CP_GTWIST,    /* twisting shear modulus 1/(1/G1 + 1/G2), Pa; 0: no contact moments */
     CP_NPARAM
 };
 
@@ -85,6 +86,8 @@ typedef struct cp_result {
     pd_v3 force;  /* on b, at point */
     pd_v3 spring; /* tangential history carried to the next step */
     pd_real kt;
+    pd_v3 couple;  /* moment on b (a gets minus it) besides the force's (cp_couple), N m */
+    pd_real twist; /* twisting history carried to the next step (cf_twist), N m */
     int touching;  /* bodies overlap (a contact) */
     pd_real ratio; /* depth / smaller particle size */
     pd_v3 point;   /* contact point, m */
@@ -397,11 +400,40 @@ PD_FN int cp_apart(const cp_world *wd, ch_key key)
     return v3_dot(d, d) > reach * reach;
 }
 
+/*
+ * The moment on b of a volumetric contact besides its force's (not in the thesis; see
+ * contact_force.h, cf_twist): the normal and tangential dashpots of eqs. 4.16 and 4.12 (eta_n,
+ * eta_t: their coefficients, N s/m) spread evenly over the contact's disc of radius
+ * a = sqrt(V / (pi delta)) (eqs. 4.17-4.18), less their resultants at the contact point, resist
+ * a relative rocking w_perp with -eta_n a^2/4 w_perp and a relative twist about n with
+ * -eta_t a^2/2 (the disc's second moments of area over its area); and the twisting spring with
+ * its Coulomb limit. The thesis's point contact has neither: a cube resting on a face kept any
+ * turn about the normal an impact gave it (2 rad/s for seconds in examples/cube_lattice.json),
+ * and its rocking was damped only through the shift of its contact point, quadratic in the
+ * amplitude (docs/VERIFICATION.md, known limits).
+ *   wrel    w_b - w_a, rad/s;  fn the normal force, N;  kt0 last step's k_t (k_t = 8 G* a, so
+ *           last step's radius is k_t0 / (8 G*));  *twist in/out: the twisting spring, N m.
+ */
+PD_FN pd_v3 cp_couple(const cp_world *wd, PD_GLOBAL const pd_real *pr, pd_v3 n, pd_v3 wrel,
+                      pd_real vol, pd_real delta, pd_real eta_n, pd_real eta_t, pd_real fn,
+                      pd_real kt0, int loading, pd_real *twist)
+{
+    pd_real rad = PD_SQRT(vol / (CF_PI * delta)), r2 = rad * rad;
+    pd_real spin = v3_dot(wrel, n);
+    pd_v3 m = v3_scale(v3_sub(wrel, v3_scale(n, spin)), -eta_n * r2 / PD_R(4));
+    pd_real ktw = cf_twist_stiffness(pr[CP_GTWIST], rad);
+    pd_real a0 = kt0 > PD_R(0) ? kt0 / (PD_R(8) * pr[CP_GSTAR]) : PD_R(0);
+    pd_real ktw0 = cf_twist_stiffness(pr[CP_GTWIST], a0);
+    pd_real mlim = PD_R(3) * CF_PI / PD_R(16) * pr[CP_MU] * fn * rad;
+    return v3_add(m, v3_scale(n, cf_twist(twist, ktw, ktw0, loading, spin, wd->dt,
+                                          eta_t * r2 / PD_R(2), mlim)));
+}
+
 /* A pair that does not touch: no force, no history. */
 PD_FN void cp_none(cp_result *res)
 {
-    res->force = res->spring = res->point = v3(0, 0, 0);
-    res->kt = 0;
+    res->force = res->spring = res->point = res->couple = v3(0, 0, 0);
+    res->kt = res->twist = 0;
     res->touching = 0;
     res->ratio = 0;
     res->gap = 0;
@@ -409,7 +441,8 @@ PD_FN void cp_none(cp_result *res)
 }
 
 /*
- * Evaluates pair `key` with last step's tangential state (spring0, kt0; zero for a new pair).
+ * Evaluates pair `key` with last step's tangential and twisting state (spring0, kt0, twist0;
+ * zero for a new pair).
  * Callers drop the pairs cp_apart rejects first (without their overlap, about half of a
  * polyhedral bed's candidates, and most of a reused list's).
  * in/rscr: the overlap scratch of this work-item (ovl_in's iscr, rscr, pts_cap). surfaces: the
@@ -417,8 +450,9 @@ PD_FN void cp_none(cp_result *res)
  * pair's contact point in the last step (world, m) when it touched then (kt0 > 0, on a reused
  * list and a new one alike, so that reusing a list changes nothing), else unused.
  */
-PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, PD_GLOBAL int *iscr,
-                   PD_GLOBAL pd_real *rscr, int pts_cap, int surfaces, pd_v3 last, cp_result *res)
+PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, pd_real twist0,
+                   PD_GLOBAL int *iscr, PD_GLOBAL pd_real *rscr, int pts_cap, int surfaces,
+                   pd_v3 last, cp_result *res)
 {
     int ia = (int)ch_first(key), ib = cp_body(wd, ch_second(key));
     np_body a, b;
@@ -524,8 +558,9 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
     if (!(delta > PD_R(0)) && !in_cohesion) return;
 
     /* relative velocity of b with respect to a at the contact point */
-    pd_v3 va = v3_add(v3_load(wd->v, ia), v3_cross(cp_omega(wd, ia), v3_sub(c, a.x)));
-    pd_v3 vb = v3_add(v3_load(wd->v, ib), v3_cross(cp_omega(wd, ib), v3_sub(c, b.x)));
+    pd_v3 wa = cp_omega(wd, ia), wb = cp_omega(wd, ib);
+    pd_v3 va = v3_add(v3_load(wd->v, ia), v3_cross(wa, v3_sub(c, a.x)));
+    pd_v3 vb = v3_add(v3_load(wd->v, ib), v3_cross(wb, v3_sub(c, b.x)));
     pd_v3 vrel = v3_sub(vb, va);
     pd_real vn = -v3_dot(vrel, n); /* approach speed */
     pd_v3 vt = v3_add(vrel, v3_scale(n, vn));
@@ -552,6 +587,13 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, P
         pd_v3 ft = cf_tangential(&s, n, kt, kt0, loading, v3_scale(vt, wd->dt), vt, damp, pr[CP_MU],
                                  fn > PD_R(0) ? fn : PD_R(0));
         f = v3_add(v3_scale(n, fn), ft);
+        if (volumetric && !linear && pr[CP_GTWIST] > PD_R(0)) { /* "contact_moments" */
+            pd_real tw = twist0;
+            res->couple = cp_couple(wd, pr, n, v3_sub(wb, wa), vol, delta,
+                                    PD_R(2) * pr[CP_GAMMA] * PD_SQRT(mstar * kn), damp,
+                                    fn > PD_R(0) ? fn : PD_R(0), kt0, loading, &tw);
+            res->twist = tw;
+        }
         res->spring = s;
         res->kt = kt;
         res->touching = 1;

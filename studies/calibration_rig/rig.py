@@ -133,9 +133,11 @@ def base_scenario(a, doors_open):
                      "shear_modulus": 2e7}},
         "interactions": [
             {"between": ["rock", "rock"], "friction": 0.39, "damping": 0.453619,
-             "contact_places": a.contact_places},
+             "contact_places": a.contact_places,
+             "contact_moments": a.contact_moments == "on"},
             {"between": ["rock", "wall"], "friction": 0.35, "damping": 0.382097,
-             "contact_places": a.contact_places}],
+             "contact_places": a.contact_places,
+             "contact_moments": a.contact_moments == "on"}],
         "shapes": {"rock": {"builtin": "rock", "triangles": a.triangles, "seed": 1}},
         "walls": walls,
     }
@@ -437,6 +439,9 @@ def main():
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--contact-places", default="merged", choices=["merged", "separate"],
                     help="thesis section 5.4: one contact per pair, or one per place")
+    ap.add_argument("--contact-moments", default="on", choices=["on", "off"],
+                    help="twisting friction and the dashpots' moments (docs/SCENARIO.md); off: "
+                    "the thesis's point contact")
     ap.add_argument("--band", type=float, nargs=2, default=[10, 45])
     ap.add_argument("--min-height", type=float, default=0.035,
                     help="m, the pile's top (times --scale)")

@@ -37,6 +37,9 @@ DURATION=${DURATION:-1.3} # the piles stop creeping by then (README.md)
 # CONTACT_PLACES=separate: each place of a pair touching in several is pressed on its own
 # (docs/SCENARIO.md, interactions[].contact_places); merged, the thesis's model, by default
 PLACES=${CONTACT_PLACES:-merged}
+# CONTACT_MOMENTS=off: the thesis's point contact, without twisting friction and the dashpots'
+# moments (docs/SCENARIO.md, interactions[].contact_moments); on by default
+MOMENTS=${CONTACT_MOMENTS:-on}
 [ -x "$POLYDEM" ] || { echo "error: $POLYDEM not built (run make)" >&2; exit 1; }
 [ -x "$REPOSE_FIT" ] || { echo "error: $REPOSE_FIT not built (make studies builds it)" >&2; exit 1; }
 rm -rf "$OUT"
@@ -51,7 +54,7 @@ run() {
     echo $(($(date +%s) - t0))
 }
 echo "calibration_rig: $PARTICLES particles, phase 2 $DURATION s, triangles $TRIS, seeds $SEEDS," \
-    "contact places $PLACES, rig scale $SCALE"
+    "contact places $PLACES, contact moments $MOMENTS, rig scale $SCALE"
 echo '{"cases": [' >"$OUT/cases.json"
 sep=
 for t in $TRIS; do
@@ -60,11 +63,11 @@ for t in $TRIS; do
         [ "$seed" = 1 ] || tag=${t}_s$seed
         "$PY" "$HERE/rig.py" phase1 --triangles "$t" --seed "$seed" --particles "$PARTICLES" \
             --scale "$SCALE" \
-            --contact-places "$PLACES" --out "$OUT"
+            --contact-places "$PLACES" --contact-moments "$MOMENTS" --out "$OUT"
         s1=$(run "$OUT/rig_${tag}_1.json" "$OUT/rig_${tag}_1.h5")
         "$PY" "$HERE/rig.py" phase2 --triangles "$t" --seed "$seed" --duration "$DURATION" \
             --scale "$SCALE" \
-            --contact-places "$PLACES" --out "$OUT"
+            --contact-places "$PLACES" --contact-moments "$MOMENTS" --out "$OUT"
         s2=$(run "$OUT/rig_${tag}_2.json" "$OUT/rig_${tag}_2.h5")
         echo "  $t triangles, seed $seed: filling $s1 s, flow and pile $s2 s (wall clock)"
         "$PY" "$HERE/rig.py" heightmap --triangles "$t" --seed "$seed" --scale "$SCALE" --out "$OUT"

@@ -29,11 +29,17 @@ if $PY -c "import jsonschema" 2>/dev/null; then
     if schema_check "$tmp/places.json" 2>"$tmp/e" && $POLYDEM validate "$tmp/places.json" >/dev/null 2>&1; then
         ok "accepted_by_both contact_places separate"
     else bad "accepted_by_both contact_places separate" "$(cat "$tmp/e")"; fi
+    sed 's/"friction"/"contact_moments": false, "friction"/' examples/collision.json >"$tmp/moments.json"
+    if schema_check "$tmp/moments.json" 2>"$tmp/e" && $POLYDEM validate "$tmp/moments.json" >/dev/null 2>&1; then
+        ok "accepted_by_both contact_moments false"
+    else bad "accepted_by_both contact_moments false" "$(cat "$tmp/e")"; fi
     # structural errors: both refuse
     n=0
     for edit in 's/"friction"/"frction"/' 's/"dt": 1e-6/"dt": -1/' 's/"size": 0.02/"size": "big"/' \
         's/"rock", "rock"/"rock"/' 's/"friction"/"contact_places": "apart", "friction"/' \
-        's/"friction"/"model": "linear", "normal_stiffness": 1e4, "contact_places": "separate", "friction"/'; do
+        's/"friction"/"model": "linear", "normal_stiffness": 1e4, "contact_places": "separate", "friction"/' \
+        's/"friction"/"contact_moments": 1, "friction"/' \
+        's/"friction"/"model": "linear", "normal_stiffness": 1e4, "contact_moments": true, "friction"/'; do
         n=$((n + 1))
         sed "$edit" examples/collision.json >"$tmp/bad$n.json"
         if ! schema_check "$tmp/bad$n.json" 2>/dev/null && ! $POLYDEM validate "$tmp/bad$n.json" >/dev/null 2>&1; then

@@ -199,6 +199,34 @@ TEST(tangential_spring_sticks_then_slides)
     CHECK_NEAR(-1, f.x, 1e-12);
 }
 
+/*
+ * The twisting spring (cf_twist) sticks then slides, as the tangential one: a steady relative
+ * spin winds it at k_tw dt per step until it reaches the Coulomb limit, where it stays; the
+ * dashpot adds damp * spin while it sticks; a smaller stiffness on unloading scales the stored
+ * moment down in proportion; and a zero limit (no friction) leaves no moment at all. Exact
+ * within rounding: every case is closed form.
+ */
+TEST(twisting_spring_sticks_then_slides)
+{
+    double ktw = 2.0, spin = 3.0, dt = 1e-3, lim = 0.05, tw = 0;
+    for (int i = 1; i <= 20; i++) {
+        double m = cf_twist(&tw, ktw, ktw, 1, spin, dt, 0, lim);
+        double wound = ktw * spin * dt * i; /* 0.006 per step: the limit at the 9th */
+        CHECK_NEAR(wound < lim ? -wound : -lim, m, 1e-15);
+    }
+    tw = 0; /* the dashpot while it sticks */
+    CHECK_NEAR(-ktw * spin * dt - 1e-3 * spin, cf_twist(&tw, ktw, ktw, 1, spin, dt, 1e-3, lim),
+               1e-15);
+    CHECK_NEAR(-ktw * spin * dt, tw, 1e-15); /* the spring keeps only the elastic part */
+    tw = -0.04; /* unloading at half the stiffness halves the stored moment */
+    CHECK_NEAR(-0.02, cf_twist(&tw, 1.0, 2.0, 0, 0, dt, 0, lim), 1e-15);
+    tw = 0;
+    CHECK_NEAR(0, cf_twist(&tw, ktw, ktw, 1, spin, dt, 1e-3, 0), 0);
+    CHECK_NEAR(0, tw, 0);
+    /* Reissner-Sagoci: 16/3 G a^3 */
+    CHECK_REL(16.0 / 3 * 4e6 * 1e-6, cf_twist_stiffness(4e6, 1e-2), 1e-15);
+}
+
 TEST(effective_properties)
 {
     /* eq. 4.2 with equal materials: E* = E / (2 (1 - nu^2)); standard Mindlin G* = G / (2 (2 - nu))
@@ -252,6 +280,7 @@ int main(void)
     RUN(linear_model_restitution_and_duration);
     RUN(polyhedral_spheres_follow_hertz);
     RUN(tangential_spring_sticks_then_slides);
+    RUN(twisting_spring_sticks_then_slides);
     RUN(effective_properties);
     RUN(opencl_forces_match_host);
     return TEST_DONE();

@@ -966,31 +966,37 @@ static void reuse_is_exact(const char *precision)
  * sort, reference positions, travel and list offsets: 312 bytes in double precision, 224 in
  * single, plus the run's fixed buffers (shapes, walls, stats: under 16 bytes a particle at 8 000).
  * Per pair slot: 8 (key) + 7 reals (spring, stiffness, contact point) in the list and in the
- * carried copy, 3 reals + 8 (force, info, second-body list) in the work arrays.
+ * carried copy, 3 reals + 8 (force, info, second-body list) in the work arrays; with contact
+ * moments (the default for polyhedra) another real (twist) in the list and its copy, and 3
+ * (couple) in the work arrays. Checked with and without them.
  */
-static void check_memory(const char *precision, double rs, double per_particle)
+static void check_memory(const char *precision, int moments, double rs, double per_particle)
 {
     char json[1500];
     snprintf(json, sizeof json,
              "{\"name\": \"mem\", \"precision\": \"%s\", \"time\": {\"dt\": 1e-5, \"duration\": 1},"
              " \"materials\": {\"m\": {\"density\": 2600, \"youngs_modulus\": 1e6, "
              "\"poisson_ratio\": 0.25}}, \"interactions\": [{\"between\": [\"m\", \"m\"], "
-             "\"friction\": 0.5, \"damping\": 0.3}], \"shapes\": {\"s\": {\"builtin\": "
+             "\"friction\": 0.5, \"damping\": 0.3, \"contact_moments\": %s}], \"shapes\": {\"s\": "
+             "{\"builtin\": "
              "\"schonhardt\"}}, \"particles\": [{\"shape\": \"s\", \"material\": \"m\", \"count\": "
              "8000, \"size\": 0.01, \"region\": {\"min\": [0, 0, 0], \"max\": [0.4, 0.4, 0.4]}, "
              "\"arrangement\": \"lattice\", \"orientation\": \"random\"}], \"walls\": [{\"name\": "
              "\"floor\", \"material\": \"m\", \"box\": {\"min\": [-1, -1, -0.1], \"max\": [1, 1, "
              "-0.01]}}]}",
-             precision);
+             precision, moments ? "true" : "false");
     run r;
     if (start(&r, json)) return;
     sim *m = r.m;
     double scratch = (double)m->nwork * (4.0 * m->ilen + rs * m->rlen);
-    double pairs = (double)m->pairs.cap * (8 + 7 * rs) + (double)m->carry.cap * (8 + 7 * rs) +
-                   (double)m->work_cap * (3 * rs + 8);
+    double kept = 8 + (moments ? 8 : 7) * rs;
+    double pairs = (double)m->pairs.cap * kept + (double)m->carry.cap * kept +
+                   (double)m->work_cap * ((moments ? 6 : 3) * rs + 8);
     double rest = (m->bytes - scratch - pairs) / m->n;
-    printf("  %s: %.1f bytes a particle besides %zu pair slots and the scratch\n", precision, rest,
-           m->pairs.cap);
+    printf("  %s, contact moments %s: %.1f bytes a particle besides %zu pair slots and the "
+           "scratch\n",
+           precision, moments ? "on" : "off", rest, m->pairs.cap);
+    CHECK_EQ_INT(moments, m->moments);
     CHECK(m->pairs.cap > 0 && m->work_cap > 0);
     CHECK(rest >= per_particle && rest <= per_particle + 16);
     finish(&r);
@@ -998,8 +1004,10 @@ static void check_memory(const char *precision, double rs, double per_particle)
 
 TEST(memory_per_particle_is_bounded)
 {
-    if (pd_device_has_fp64(dev)) check_memory("double", 8, 312);
-    check_memory("single", 4, 224);
+    for (int moments = 0; moments < 2; moments++) {
+        if (pd_device_has_fp64(dev)) check_memory("double", moments, 8, 312);
+        check_memory("single", moments, 4, 224);
+    }
 }
 
 TEST(pair_list_reuse_is_exact)
@@ -1901,15 +1909,81 @@ TEST(moving_wall_pushes_sphere)
 }
 
 /*
+ * Twisting friction (contact_moments; kernels/contact_force.h, cf_twist): a cube spinning about
+ * the vertical on a floor, its contact point under its centre so that no sliding resists the
+ * spin, slows at the Coulomb limit M = 3 pi/16 mu m g a of a disc of radius a = sqrt(V /
+ * (pi delta)) = side / sqrt(pi) (a flat contact's V = side^2 delta): alpha = M / I with
+ * I = m side^2 / 6, so it stops after w0 / alpha, turned by w0^2 / (2 alpha). Tolerances: 1 % on
+ * the rate while sliding (the normal force is m g to the contact's small settling), 3 % on the
+ * angle (the spring's wind-up at the start and its few steps of creep at the end). With the
+ * moments off (the thesis's point contact) only the wandering of the contact point slows the spin
+ * (a tilt of 1e-4 rad moves a resting cube's overlap centroid by 2 mm off its axis, where
+ * friction then acts): it measured 1.8 rad/s after 40 ms, where twisting friction stops it in 16.
+ */
+TEST(cube_spin_stops_by_twisting_friction)
+{
+    const double d = 0.02, a = cube_side(d), rho = 2500, E = 1e7, nu = 0.25, mu = 0.5, g = 9.81;
+    const double w0 = 10, dt = 1e-5;
+    double m = rho * a * a * a, I = m * a * a / 6;
+    double estar = E / (2 * (1 - nu * nu));
+    /* resting depth: m g = 4/(3 sqrt(pi)) E* sqrt(V delta) with V = a^2 delta */
+    double depth = m * g * 3 * sqrt(PI) / (4 * estar * a);
+    double mlim = 3 * PI / 16 * mu * m * g * a / sqrt(PI), alpha = mlim / I;
+    for (int moments = 1; moments >= 0; moments--) {
+        char json[1500];
+        snprintf(json, sizeof json,
+                 "{\"name\": \"spin\", \"time\": {\"dt\": %g, \"duration\": 1, "
+                 "\"output_interval\": 1},"
+                 " \"materials\": {\"m\": {\"density\": %g, \"youngs_modulus\": %g, "
+                 "\"poisson_ratio\": %g}},"
+                 " \"interactions\": [{\"between\": [\"m\", \"m\"], \"friction\": %g, "
+                 "\"damping\": 0.5, \"contact_moments\": %s}],"
+                 " \"shapes\": {\"c\": {\"builtin\": \"cube\"}},"
+                 " \"particles\": [{\"shape\": \"c\", \"material\": \"m\", \"list\": ["
+                 " {\"position\": [0, 0, %.12g], \"angular_velocity\": [0, 0, %g], "
+                 "\"size\": %g}]}],"
+                 " \"walls\": [{\"name\": \"floor\", \"material\": \"m\", \"box\": {\"min\": "
+                 "[-0.1, -0.1, -0.02], \"max\": [0.1, 0.1, 0]}}]}",
+                 dt, rho, E, nu, mu, moments ? "true" : "false", 0.5 * a - depth, w0, d);
+        run r;
+        if (start(&r, json)) return;
+        double L[3], q[4], wz[2] = {0, 0};
+        int marks[2] = {200, 1200}; /* 2 ms and 12 ms: both while sliding (stop at ~16 ms) */
+        for (int i = 1, k = 0; i <= 4000; i++) {
+            if (step(&r)) break;
+            if (k < 2 && i == marks[k]) {
+                get(&r, r.m->L, 3, L);
+                wz[k++] = L[2] / I;
+            }
+        }
+        get(&r, r.m->L, 3, L);
+        get(&r, r.m->q, 4, q);
+        double turned = 2 * atan2(q[3], q[0]), rate = (wz[0] - wz[1]) / (1000 * dt);
+        if (moments) {
+            printf("  slowing at %.2f rad/s^2 (M / I = %.2f); stopped at %.3g rad/s, turned "
+                   "%.5f rad (w0^2 / (2 alpha) = %.5f)\n",
+                   rate, alpha, L[2] / I, turned, w0 * w0 / (2 * alpha));
+            CHECK_NEAR(alpha, rate, 0.01 * alpha);
+            CHECK(fabs(L[2] / I) < 1e-3 * w0);
+            CHECK_NEAR(w0 * w0 / (2 * alpha), turned, 0.03 * w0 * w0 / (2 * alpha));
+        } else {
+            printf("  without contact moments: %.6f rad/s after 40 ms (w0 = %g)\n", L[2] / I, w0);
+            CHECK(L[2] / I > 0.1 * w0);
+        }
+        finish(&r);
+    }
+}
+
+/*
  * A turning wall: a cube resting on a table that turns at W about z (through the origin), with
  * friction enough to hold it (mu g = 4.9 m/s^2 against the W^2 r = 0.4 m/s^2 it needs), is carried
  * round with it once it has caught up: its centre moves at W r, across the radius. The table's
  * surface moves at W x r, so this checks the wall's contact velocity. Tolerance 1 %: the
  * tangential spring that holds the cube gives a little (a creep of ~2e-3 of the speed was
- * measured) and the spin-up takes ~0.05 s of the 0.3 s. (The cube's own spin about z is not
- * checked: the volumetric model acts at one contact point, the overlap's centroid, nearly under
- * the cube's centre, so nothing resists a turn about the normal, thesis chapter 4; it ended at
- * 1.05 rad/s, not the table's 2.)
+ * measured) and the spin-up takes ~0.05 s of the 0.3 s. The cube also turns with the table
+ * about its own axis, at W to 1 %: twisting friction (contact_moments) carries it. (The thesis's
+ * point contact, the overlap's centroid nearly under the cube's centre, does not resist a turn
+ * about the normal: without the contact moments the cube ended at 1.05 rad/s, not W = 2.)
  */
 TEST(cube_rides_a_turntable)
 {
@@ -1931,15 +2005,18 @@ TEST(cube_rides_a_turntable)
     if (start(&r, json)) return;
     for (int i = 0; i < 30000; i++)
         if (step(&r)) break;
-    double x[3], v[3];
+    double x[3], v[3], L[3];
     get(&r, r.m->x, 3, x);
     get(&r, r.m->v, 3, v);
+    get(&r, r.m->L, 3, L);
+    double m = 2500 * a * a * a, spin = L[2] / (m * a * a / 6);
     double rad = hypot(x[0], x[1]), speed = hypot(v[0], v[1]);
     double along = (x[0] * v[0] + x[1] * v[1]) / rad; /* radial velocity */
     double turn = atan2(x[1], x[0]);                  /* how far round it has gone */
     printf("  at r = %.5f m: speed %.5f m/s (W r = %.5f), radial %.2e m/s, turned %.4f rad "
-           "(the table %.4f)\n",
-           rad, speed, W * rad, along, turn, W * 0.3);
+           "(the table %.4f), spinning at %.5f rad/s\n",
+           rad, speed, W * rad, along, turn, W * 0.3, spin);
+    CHECK_NEAR(W, spin, 0.01 * W);
     CHECK_NEAR(W * rad, speed, 0.01 * W * rad);
     CHECK_NEAR(0, along, 0.01 * W * rad);
     CHECK_NEAR(r0, rad, 0.01 * r0);
@@ -1970,6 +2047,7 @@ int main(void)
     RUN(stokes_drag_relaxation);
     RUN(moving_wall_pushes_sphere);
     RUN(cube_rides_a_turntable);
+    RUN(cube_spin_stops_by_twisting_friction);
     RUN(cohesion_stickiness_threshold);
     RUN(icosphere_collision_like_hertz_sphere);
     RUN(energy_is_conserved_without_damping);

@@ -68,12 +68,13 @@ TEST(gather_equals_the_direct_sum_exactly)
     qsort(keys, NC, sizeof keys[0], key_cmp);
     /* small integers everywhere: the cross products and sums are exact, so the gather must equal
      * the direct accumulation exactly */
-    double force[3 * NC], point[3 * NC], x[3 * NP];
+    double force[3 * NC], point[3 * NC], couple[3 * NC], x[3 * NP];
     for (int i = 0; i < 3 * NP; i++)
         x[i] = (double)(int)(rnd64() % 21) - 10;
     for (int i = 0; i < 3 * NC; i++) {
         force[i] = (double)(int)(rnd64() % 201) - 100;
         point[i] = (double)(int)(rnd64() % 21) - 10;
+        couple[i] = (double)(int)(rnd64() % 41) - 20;
     }
     /* first-body segments from the sorted keys; second-body lists in reverse contact order, so
      * the gather must sort them to sum in key order */
@@ -103,12 +104,15 @@ TEST(gather_equals_the_direct_sum_exactly)
             double rb1 = point[3 * c + k1] - x[3 * b + k1], rb2 = point[3 * c + k2] - x[3 * b + k2];
             direct_t[3 * a + k] += ra1 * fa2 - ra2 * fa1;
             direct_t[3 * b + k] += rb1 * force[3 * c + k2] - rb2 * force[3 * c + k1];
+            /* the contact's own moment: on b, and minus it on a */
+            direct_t[3 * a + k] -= couple[3 * c + k];
+            direct_t[3 * b + k] += couple[3 * c + k];
         }
     }
     int exact = 1;
     for (unsigned p = 0; p < NP; p++) {
         pd_v3 f, t;
-        ch_gather(p, first, second_off, second_list, force, point, x, &f, &t);
+        ch_gather(p, first, second_off, second_list, force, point, couple, x, &f, &t);
         exact &= f.x == direct_f[3 * p] && f.y == direct_f[3 * p + 1] &&
                  f.z == direct_f[3 * p + 2] && t.x == direct_t[3 * p] &&
                  t.y == direct_t[3 * p + 1] && t.z == direct_t[3 * p + 2];

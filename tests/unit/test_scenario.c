@@ -147,6 +147,7 @@ TEST(defaults)
     CHECK_NEAR(0.5, s->inter[0].friction, 0);
     CHECK_EQ_INT(SC_MODEL_HERTZ_MINDLIN, s->inter[0].model);
     CHECK_EQ_INT(0, s->inter[0].separate_places); /* "merged", the thesis's model */
+    CHECK_EQ_INT(1, s->inter[0].contact_moments); /* on by default for hertz_mindlin */
     CHECK_NEAR(0.01 / 100, s->output_interval, 1e-18);
     CHECK_NEAR(0.01 / 1000, s->stats_interval, 1e-18);
     CHECK_NEAR(1, s->group[0].orientation[0], 0);
@@ -268,6 +269,18 @@ TEST(errors_name_the_field)
                  "\"normal_stiffness\": 1e4, \"contact_places\": \"separate\"}],"
                  "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
                  "/interactions/0/contact_places", "is for \"model\": \"hertz_mindlin\"");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"], \"contact_moments\": "
+                 "\"yes\"}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/interactions/0/contact_moments", "must be true or false");
+    expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
+                 "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+                 "\"interactions\": [{\"between\": [\"rock\", \"rock\"], \"model\": \"linear\", "
+                 "\"normal_stiffness\": 1e4, \"contact_moments\": true}],"
+                 "\"shapes\": {\"s\": {\"builtin\": \"schonhardt\"}}," BASE_GROUP,
+                 "/interactions/0/contact_moments", "is for \"model\": \"hertz_mindlin\"");
     expect_error("{\"time\": {\"dt\": 1e-6, \"duration\": 0.01},"
                  "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
                  "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
