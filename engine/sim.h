@@ -35,7 +35,8 @@ enum { SIM_INTEGRATE, SIM_BVH, SIM_TRAVERSE, SIM_CONTACTS, SIM_GATHER, SIM_NSTAG
 
 typedef struct sim_pairs {
     cl_mem keys, spring, kt;
-    cl_mem point; /* last step's contact point (world): the next overlap's origin */
+    cl_mem point; /* last step's contact point (world): the next overlap's origin in single
+                     precision (OVL_ORIGIN); NULL in double precision, which does not use it */
     cl_mem twist; /* the twisting spring's moment, N m (kernels/contact_force.h, cf_twist) */
     size_t cap;   /* capacity in pairs */
 } sim_pairs;
@@ -45,8 +46,8 @@ typedef struct sim {
     const pd_scenario *s;
     int dbl;    /* double precision on the device */
     int places; /* an interaction asks for separate places: the CL_PLACES build, its scratch */
-    /* some polyhedral pair has "contact_moments": the pair arrays carry twist and couple (NULL
-     * buffers otherwise, which the kernels test for: 4 reals a pair slot saved) */
+    /* some polyhedral pair has "contact_moments": the pair arrays carry the twist (a NULL
+     * buffer otherwise, which the kernels test for) */
     int moments;
     size_t rs; /* sizeof(pd_real) on the device */
     int n, nwall, nbody, nmat, nshape;
@@ -114,7 +115,7 @@ typedef struct sim {
      */
     sim_pairs pairs, carry;
     int npairs;
-    cl_mem force, couple, info, second_list; /* couple: the twisting moment on the second body */
+    cl_mem force, torque, info, second_list; /* torque: on the first body (ch_first_torque) */
     cl_mem second_count, second_off; /* per particle: contacts as second body, their offsets */
     size_t work_cap;                 /* capacity of the per-pair work arrays above */
     /* overlap scratch, per contact work-item */

@@ -849,7 +849,7 @@ void sim_destroy(sim *m)
                       &m->carry.point,
                       &m->carry.twist,
                       &m->force,
-                      &m->couple,
+                      &m->torque,
                       &m->info,
                       &m->second_list,
                       &m->second_count,

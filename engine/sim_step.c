@@ -62,7 +62,9 @@ static int grow_pairs(sim *m, sim_pairs *p, size_t need, const char *what, pd_er
     size_t cap = pair_capacity(need);
     cl_int e = CL_SUCCESS;
     cl_context ctx = m->dev->ctx;
-    m->bytes += (double)(cap - p->cap) * (sizeof(cl_ulong) + (m->moments ? 8 : 7) * m->rs);
+    /* key, spring, kt; the twist with contact moments, the point in single precision */
+    m->bytes += (double)(cap - p->cap) *
+                (sizeof(cl_ulong) + (4 + (m->moments ? 1 : 0) + (m->dbl ? 0 : 3)) * m->rs);
     if (p->keys) clReleaseMemObject(p->keys);
     if (p->spring) clReleaseMemObject(p->spring);
     if (p->kt) clReleaseMemObject(p->kt);
@@ -74,7 +76,7 @@ static int grow_pairs(sim *m, sim_pairs *p, size_t need, const char *what, pd_er
     if (e == CL_SUCCESS)
         p->spring = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * 3 * cap, NULL, &e);
     if (e == CL_SUCCESS) p->kt = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * cap, NULL, &e);
-    if (e == CL_SUCCESS)
+    if (e == CL_SUCCESS && !m->dbl)
         p->point = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * 3 * cap, NULL, &e);
     if (e == CL_SUCCESS && m->moments)
         p->twist = clCreateBuffer(ctx, CL_MEM_READ_WRITE, m->rs * cap, NULL, &e);
@@ -93,17 +95,15 @@ static int ensure_pairs(sim *m, int npairs, pd_error *err)
     if (rc != PD_OK) return rc;
     if (need > m->work_cap || !m->force) {
         size_t cap = pair_capacity(need);
-        cl_mem *b[] = {&m->force, &m->info, &m->second_list, &m->couple};
-        size_t sz[] = {m->rs * 3, sizeof(float), sizeof(int), m->rs * 3}; /* info: floats */
-        size_t nb = m->moments ? 4 : 3; /* the couples only with contact moments */
-        m->bytes += (double)(cap - m->work_cap) *
-                    ((m->moments ? 6 : 3) * m->rs + sizeof(float) + sizeof(int));
+        cl_mem *b[] = {&m->force, &m->torque, &m->info, &m->second_list};
+        size_t sz[] = {m->rs * 3, m->rs * 3, sizeof(float), sizeof(int)}; /* info: floats */
+        m->bytes += (double)(cap - m->work_cap) * (6 * m->rs + sizeof(float) + sizeof(int));
         m->work_cap = 0;
         for (size_t i = 0; i < sizeof b / sizeof b[0]; i++) {
             if (*b[i]) clReleaseMemObject(*b[i]);
             *b[i] = NULL;
         }
-        for (size_t i = 0; i < nb && e == CL_SUCCESS; i++)
+        for (size_t i = 0; i < sizeof b / sizeof b[0] && e == CL_SUCCESS; i++)
             *b[i] = clCreateBuffer(ctx, CL_MEM_READ_WRITE, sz[i] * cap, NULL, &e);
         if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateBuffer(contact work)", e);
         m->work_cap = cap;
@@ -389,7 +389,7 @@ static int contacts(sim *m, pd_error *err)
     /* surfaces' gaps (cp_mesh_gap) certified up to the skin, a list's reach */
     e |= arg_real(m, k, a++, m->skin);
     e |= arg_real(m, k, a++, m->list_life);
-    cl_mem outs[] = {m->force,    m->pairs.point, m->couple, m->pairs.spring,
+    cl_mem outs[] = {m->force,    m->pairs.point, m->torque, m->pairs.spring,
                      m->pairs.kt, m->pairs.twist, m->info};
     for (size_t i = 0; i < sizeof outs / sizeof outs[0]; i++)
         e |= CL_ARG(k, a++, outs[i]);
@@ -438,9 +438,9 @@ static int gather(sim *m, pd_error *err)
     e |= CL_ARG(k, a++, m->offset);
     e |= CL_ARG(k, a++, m->second_off);
     e |= CL_ARG(k, a++, m->second_list);
+    e |= CL_ARG(k, a++, m->pairs.keys);
     e |= CL_ARG(k, a++, m->force);
-    e |= CL_ARG(k, a++, m->pairs.point);
-    e |= CL_ARG(k, a++, m->couple);
+    e |= CL_ARG(k, a++, m->torque);
     e |= CL_ARG(k, a++, m->x);
     e |= CL_ARG(k, a++, m->n);
     e |= CL_ARG(k, a++, m->inv_m);

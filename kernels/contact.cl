@@ -16,13 +16,14 @@
  * resting bed most candidates are such pairs, and their overlaps were half of the step.
  * A particle meets a wall's triangles found in the wall's BVH (wall_bvh.h, np_wall_local); a
  * wall-pair work-item's scratch begins with np_wall_ilen/_rlen(wall_cap) for them.
- * Per pair out: force on the second body (3), the contact point (3; kept, as the spring, for the
- * next step's overlap: contact_pair.h, OVL_ORIGIN), the moment on the second body (3), the new
- * tangential spring (3), stiffness (1) (or certificate) and twist (1), and info (1 float in
- * either precision, for statistics): depth / smaller size when the bodies touch, -1 when they do
- * not, -2 when skipped as certified apart, -(3 + k) when apart but too close for a certificate,
- * the surfaces' gap not to be searched for k more steps (CP_GAP_RETRY). couple and twist (and
- * carry_twist) are NULL in a run without contact moments (engine/sim.h).
+ * Per pair out: force on the second body (3), torque on the first (3; ch_first_torque), the
+ * contact point (3; kept, as the spring, for the next step's overlap in single precision:
+ * contact_pair.h, OVL_ORIGIN), the new tangential spring (3), stiffness (1) (or certificate) and
+ * twist (1), and info (1 float in either precision, for statistics): depth / smaller size when
+ * the bodies touch, -1 when they do not, -2 when skipped as certified apart, -(3 + k) when apart
+ * but too close for a certificate, the surfaces' gap not to be searched for k more steps
+ * (CP_GAP_RETRY). point (and carry_point) are NULL in double precision, twist (and carry_twist)
+ * in a run without contact moments (engine/sim.h).
  */
 #include "pd_real.h"
 #include "contact_pair.h"
@@ -51,7 +52,7 @@ __kernel void contact_forces(
     __global const int *wtri_order, int wall_cap, int nwall, __global int *status,
     __global int *iscr, __global pd_real *rscr, int ilen, int rlen, int pts_cap, int nwork,
     __global const pd_real *travel, pd_real gap_cap, pd_real list_life, __global pd_real *force,
-    __global pd_real *point, __global pd_real *couple, __global pd_real *spring,
+    __global pd_real *point, __global pd_real *torque, __global pd_real *spring,
     __global pd_real *kt, __global pd_real *twist, __global float *info)
 {
     int g = (int)get_global_id(0);
@@ -103,8 +104,8 @@ __kernel void contact_forces(
         } else if (!fresh && kt[c] < PD_R(0) && pair_travel(travel, k, nparticles) < -kt[c]) {
             /* certified apart: kt holds -(gap + travel then); they have not moved that far */
             force[3 * c] = force[3 * c + 1] = force[3 * c + 2] = PD_R(0);
-            point[3 * c] = point[3 * c + 1] = point[3 * c + 2] = PD_R(0);
-            if (couple) couple[3 * c] = couple[3 * c + 1] = couple[3 * c + 2] = PD_R(0);
+            torque[3 * c] = torque[3 * c + 1] = torque[3 * c + 2] = PD_R(0);
+            if (point) point[3 * c] = point[3 * c + 1] = point[3 * c + 2] = PD_R(0);
             info[c] = -2.0f;
             continue;
         } else if (fresh) {
@@ -113,21 +114,20 @@ __kernel void contact_forces(
                 j = ch_find(carry_keys + lo, carry_offset[ch_first(k) + 1] - lo, k);
             j = j >= 0 ? lo + j : -1;
             pd_v3 s0 = j >= 0 ? v3_load(carry_spring, j) : v3(0, 0, 0),
-                  p0 = j >= 0 ? v3_load(carry_point, j) : v3(0, 0, 0);
+                  p0 = j >= 0 && carry_point ? v3_load(carry_point, j) : v3(0, 0, 0);
             pd_real kt0 = j >= 0 ? carry_kt[j] : PD_R(0),
                     tw0 = j >= 0 && carry_twist ? carry_twist[j] : PD_R(0);
             cp_pair(&wd, k, s0, kt0, tw0, is, rs, pts_cap, 1, p0, &r);
         } else { /* kt > 0: it touched in the last step, at point (as carried on a new list) */
             cp_pair(&wd, k, v3_load(spring, c), pd_max(kt[c], PD_R(0)), twist ? twist[c] : PD_R(0),
-                    is, rs, pts_cap, wait == 0, v3_load(point, c), &r);
+                    is, rs, pts_cap, wait == 0, point ? v3_load(point, c) : v3(0, 0, 0), &r);
         }
         v3_store(force, c, r.force);
-        v3_store(point, c, r.point);
+        v3_store(torque, c,
+                 ch_first_torque(v3_load(x, (int)ch_first(k)), r.point, r.force, r.couple));
+        if (point) v3_store(point, c, r.point);
         v3_store(spring, c, r.spring);
-        if (couple) { /* a run with contact moments (engine/sim.h) */
-            v3_store(couple, c, r.couple);
-            twist[c] = r.twist;
-        }
+        if (twist) twist[c] = r.twist; /* a run with contact moments (engine/sim.h) */
         /* a separated pair keeps its certificate where a touching one keeps its stiffness:
          * -(gap + travel so far), rounded down, valid while the list is (never carried) */
         kt[c] = r.gap > PD_R(0)
@@ -169,7 +169,7 @@ __kernel void history_keep(__global const int *offset, __global const ch_key *ke
         carry_keys[j] = keys[c];
         v3_store(carry_spring, j, v3_load(spring, c));
         carry_kt[j] = kt[c];
-        v3_store(carry_point, j, v3_load(point, c));
+        if (point) v3_store(carry_point, j, v3_load(point, c));
         if (twist) carry_twist[j] = twist[c];
         j++;
     }

@@ -94,27 +94,36 @@ PD_FN void ch_carry(PD_GLOBAL const ch_key *old_keys, int n_old,
 }
 
 /*
+ * Torque on the first body of a contact about its centre xa: (c - xa) x (-F) - M, for the force
+ * F on the second body at contact point c and the contact's own moment M on the second body
+ * (contact_pair.h, cp_couple; zero without contact moments). What the contact stage stores per
+ * pair, with F: the gather needs no contact point (ch_gather).
+ */
+PD_FN pd_v3 ch_first_torque(pd_v3 xa, pd_v3 c, pd_v3 f, pd_v3 m)
+{
+    return v3_sub(v3_cross(v3_sub(c, xa), v3_scale(f, -1)), m);
+}
+
+/*
  * Sum over particle p's contacts of the force and torque on p. Its contacts as first body are
  * first[p] .. first[p+1]-1 (the step's keys are sorted, so they are contiguous and in key
  * order). Its contacts as second body are listed, in any order, in second_list[second_off[p] ..
  * second_off[p+1]-1]; the list is sorted here (only p's gather touches it) so they are summed in
- * key order too. Contact c carries force[3c] acting on its second body (the first body gets
- * minus it) at the contact point point[3c], and a moment couple[3c] on its second body (minus it
- * on the first: the twisting resistance); the torque on p is (point - x_p) x (force on p) plus
- * its moment, with x_p = x[3p] its centre (couple NULL: no moments). (Storing the point, not
- * two torques, saves 3 reals per pair.)
+ * key order too. Contact c carries force[3c], acting on its second body (the first body gets
+ * minus it), and torque[3c], the torque on its first body a about a's centre (ch_first_torque).
+ * The second body b's torque about its own centre follows without the contact point:
+ * (c - xb) x F + M = (xa - xb) x F - torque. (Storing one torque, not the point and a moment,
+ * saves 3 reals per pair; the point is kept only where single precision needs it.)
  */
 PD_FN void ch_gather(unsigned p, PD_GLOBAL const int *first, PD_GLOBAL const int *second_off,
-                     PD_GLOBAL int *second_list, PD_GLOBAL const pd_real *force,
-                     PD_GLOBAL const pd_real *point, PD_GLOBAL const pd_real *couple,
+                     PD_GLOBAL int *second_list, PD_GLOBAL const ch_key *keys,
+                     PD_GLOBAL const pd_real *force, PD_GLOBAL const pd_real *torque,
                      PD_GLOBAL const pd_real *x, pd_v3 *f_out, pd_v3 *t_out)
 {
     pd_v3 f = v3(0, 0, 0), t = v3(0, 0, 0), xp = v3_load(x, (int)p);
     for (int c = first[p]; c < first[p + 1]; c++) {
-        pd_v3 fc = v3_scale(v3_load(force, c), -1);
-        f = v3_add(f, fc);
-        t = v3_add(t, v3_cross(v3_sub(v3_load(point, c), xp), fc));
-        if (couple) t = v3_sub(t, v3_load(couple, c));
+        f = v3_sub(f, v3_load(force, c));
+        t = v3_add(t, v3_load(torque, c));
     }
     PD_GLOBAL int *l = second_list + second_off[p];
     int m = second_off[p + 1] - second_off[p];
@@ -128,10 +137,9 @@ PD_FN void ch_gather(unsigned p, PD_GLOBAL const int *first, PD_GLOBAL const int
     }
     for (int s = 0; s < m; s++) {
         int c = l[s];
-        pd_v3 fc = v3_load(force, c);
+        pd_v3 fc = v3_load(force, c), xa = v3_load(x, (int)ch_first(keys[c]));
         f = v3_add(f, fc);
-        t = v3_add(t, v3_cross(v3_sub(v3_load(point, c), xp), fc));
-        if (couple) t = v3_add(t, v3_load(couple, c));
+        t = v3_add(t, v3_sub(v3_cross(v3_sub(xa, xp), fc), v3_load(torque, c)));
     }
     *f_out = f;
     *t_out = t;

@@ -49,8 +49,8 @@ __kernel void second_fill(__global const ch_key *keys, int n, int nparticles,
  * volume-equivalent diameter). Drag exerts no torque in this model.
  */
 __kernel void body_forces(__global const int *first, __global const int *second_off,
-                          __global int *second_list, __global const pd_real *force,
-                          __global const pd_real *point, __global const pd_real *couple,
+                          __global int *second_list, __global const ch_key *keys,
+                          __global const pd_real *force, __global const pd_real *torque,
                           __global const pd_real *x, int nparticles, __global const pd_real *inv_m,
                           __global const pd_real *size, __global const pd_real *v, pd_real gx,
                           pd_real gy, pd_real gz, pd_real drag_mu, pd_real ufx, pd_real ufy,
@@ -59,7 +59,7 @@ __kernel void body_forces(__global const int *first, __global const int *second_
     int p = (int)get_global_id(0);
     if (p >= nparticles) return;
     pd_v3 f, t;
-    ch_gather((unsigned)p, first, second_off, second_list, force, point, couple, x, &f, &t);
+    ch_gather((unsigned)p, first, second_off, second_list, keys, force, torque, x, &f, &t);
     f = v3_add(f, v3_scale(v3(gx, gy, gz), PD_R(1) / inv_m[p]));
     if (drag_mu > PD_R(0))
         f = v3_add(f, v3_scale(v3_sub(v3(ufx, ufy, ufz), v3_load(v, p)),

@@ -965,10 +965,10 @@ static void reuse_is_exact(const char *precision)
  * material), forces and torques (f holding the traversal's candidates too), the tree and its
  * sort, reference positions, travel and list offsets: 312 bytes in double precision, 224 in
  * single, plus the run's fixed buffers (shapes, walls, stats: under 16 bytes a particle at 8 000).
- * Per pair slot: 8 (key) + 7 reals (spring, stiffness, contact point) in the list and in the
- * carried copy, 3 reals + 8 (force, info, second-body list) in the work arrays; with contact
- * moments (the default for polyhedra) another real (twist) in the list and its copy, and 3
- * (couple) in the work arrays. Checked with and without them.
+ * Per pair slot: 8 (key) + 4 reals (spring, stiffness) in the list and in the carried copy, plus
+ * the twist (1) with contact moments (the default for polyhedra; checked with and without) and
+ * the contact point (3) in single precision; 6 reals + 8 (force, torque, info, second-body list)
+ * in the work arrays.
  */
 static void check_memory(const char *precision, int moments, double rs, double per_particle)
 {
@@ -989,9 +989,9 @@ static void check_memory(const char *precision, int moments, double rs, double p
     if (start(&r, json)) return;
     sim *m = r.m;
     double scratch = (double)m->nwork * (4.0 * m->ilen + rs * m->rlen);
-    double kept = 8 + (moments ? 8 : 7) * rs;
+    double kept = 8 + (4 + moments + (rs == 8 ? 0 : 3)) * rs;
     double pairs = (double)m->pairs.cap * kept + (double)m->carry.cap * kept +
-                   (double)m->work_cap * ((moments ? 6 : 3) * rs + 8);
+                   (double)m->work_cap * (6 * rs + 8);
     double rest = (m->bytes - scratch - pairs) / m->n;
     printf("  %s, contact moments %s: %.1f bytes a particle besides %zu pair slots and the "
            "scratch\n",
@@ -1667,7 +1667,8 @@ TEST(rotating_impact_matches_host_reference)
  * opposite at one point, so the total linear momentum sum m v and the total angular momentum
  * about the origin, sum (x cross m v + L), are constant however much energy the contacts
  * dissipate; velocity Verlet keeps both exactly (a drift leaves x cross m v unchanged, and the
- * half-kicks add sum (x_i cross f_i + t_i) dt / 2 = sum over contacts (c cross F - c cross F)).
+ * half-kicks add sum (x_i cross f_i + t_i) dt / 2 = sum over contacts (c cross F - c cross F),
+ * and the contact moments, equal and opposite couples, cancel too).
  * A torque taken about a point other than the force's, a tangential force applied to one side
  * only, or a force gathered twice would show at once (the contacts' impulses are ~1e-3 of
  * the momenta's scale at least). What is left is rounding: each step rounds every velocity and

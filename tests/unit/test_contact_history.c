@@ -68,14 +68,19 @@ TEST(gather_equals_the_direct_sum_exactly)
     qsort(keys, NC, sizeof keys[0], key_cmp);
     /* small integers everywhere: the cross products and sums are exact, so the gather must equal
      * the direct accumulation exactly */
-    double force[3 * NC], point[3 * NC], couple[3 * NC], x[3 * NP];
+    double force[3 * NC], point[3 * NC], moment[3 * NC], torque[3 * NC], x[3 * NP];
     for (int i = 0; i < 3 * NP; i++)
         x[i] = (double)(int)(rnd64() % 21) - 10;
     for (int i = 0; i < 3 * NC; i++) {
         force[i] = (double)(int)(rnd64() % 201) - 100;
         point[i] = (double)(int)(rnd64() % 21) - 10;
-        couple[i] = (double)(int)(rnd64() % 41) - 20;
+        moment[i] = (double)(int)(rnd64() % 41) - 20;
     }
+    /* what the contact stage stores: the first body's torque, not the point and the moment */
+    for (int c = 0; c < NC; c++)
+        v3_store(torque, c,
+                 ch_first_torque(v3_load(x, (int)ch_first(keys[c])), v3_load(point, c),
+                                 v3_load(force, c), v3_load(moment, c)));
     /* first-body segments from the sorted keys; second-body lists in reverse contact order, so
      * the gather must sort them to sum in key order */
     int first[NP + 1] = {0}, second_off[NP + 1] = {0}, second_list[NC], fill[NP] = {0};
@@ -97,22 +102,20 @@ TEST(gather_equals_the_direct_sum_exactly)
         for (int k = 0; k < 3; k++) {
             direct_f[3 * a + k] -= force[3 * c + k];
             direct_f[3 * b + k] += force[3 * c + k];
-            /* torque (point - x) x force: on b with +force, on a with -force */
+            /* torque (point - x) x force: on b with +force and +moment, on a with both negated */
             int k1 = (k + 1) % 3, k2 = (k + 2) % 3;
             double fa1 = -force[3 * c + k1], fa2 = -force[3 * c + k2];
             double ra1 = point[3 * c + k1] - x[3 * a + k1], ra2 = point[3 * c + k2] - x[3 * a + k2];
             double rb1 = point[3 * c + k1] - x[3 * b + k1], rb2 = point[3 * c + k2] - x[3 * b + k2];
-            direct_t[3 * a + k] += ra1 * fa2 - ra2 * fa1;
-            direct_t[3 * b + k] += rb1 * force[3 * c + k2] - rb2 * force[3 * c + k1];
-            /* the contact's own moment: on b, and minus it on a */
-            direct_t[3 * a + k] -= couple[3 * c + k];
-            direct_t[3 * b + k] += couple[3 * c + k];
+            direct_t[3 * a + k] += ra1 * fa2 - ra2 * fa1 - moment[3 * c + k];
+            direct_t[3 * b + k] +=
+                rb1 * force[3 * c + k2] - rb2 * force[3 * c + k1] + moment[3 * c + k];
         }
     }
     int exact = 1;
     for (unsigned p = 0; p < NP; p++) {
         pd_v3 f, t;
-        ch_gather(p, first, second_off, second_list, force, point, couple, x, &f, &t);
+        ch_gather(p, first, second_off, second_list, keys, force, torque, x, &f, &t);
         exact &= f.x == direct_f[3 * p] && f.y == direct_f[3 * p + 1] &&
                  f.z == direct_f[3 * p + 2] && t.x == direct_t[3 * p] &&
                  t.y == direct_t[3 * p + 1] && t.z == direct_t[3 * p + 2];
