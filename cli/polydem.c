@@ -44,11 +44,12 @@ static const char *usage_text =
     "  validate SCENARIO.json [--json]\n"
     "      checks a scenario: every error with its JSON path (exit 1), or the particle count,\n"
     "      memory estimate and stable time step\n"
-    "  run SCENARIO.json -o OUT.h5 [--device N] [--quiet] [--meshes]\n"
+    "  run SCENARIO.json -o OUT.h5 [--device N] [--quiet] [--meshes | --no-meshes]\n"
     "      runs a scenario on an OpenCL device (default: the first GPU, else the first\n"
-    "      device); writes the HDF5 result and OUT.h5.xmf for ParaView (--meshes adds every\n"
-    "      particle's surface per frame); a progress bar on a terminal; Ctrl-C cancels,\n"
-    "      keeping the frames so far (root attribute status = \"cancelled\")\n"
+    "      device); writes the HDF5 result and OUT.h5.xmf for ParaView, with every\n"
+    "      particle's surface per frame when there are polyhedra and that adds at most\n"
+    "      256 MiB (--meshes: always, --no-meshes: never); a progress bar on a terminal;\n"
+    "      Ctrl-C cancels, keeping the frames so far (root attribute status = \"cancelled\")\n"
     "  devices [--json]\n"
     "      the OpenCL devices; N is what --device N takes\n"
     "\n"
@@ -300,8 +301,10 @@ static int cmd_validate(int argc, char **argv)
             printf("%.17g", m.dt_hertz);
         else
             printf("null");
-        printf(", \"memory_bytes\": %.0f, \"contact_resolution_m\": %.17g}\n", m.memory_bytes,
-               m.contact_resolution);
+        printf(", \"memory_bytes\": %.0f, \"contact_resolution_m\": %.17g, \"frames\": %ld, "
+               "\"mesh_view_bytes\": %.0f, \"mesh_view_default\": %s}\n",
+               m.memory_bytes, m.contact_resolution, m.frames, m.mesh_view_bytes,
+               m.mesh_view_default ? "true" : "false");
     } else {
         printf("%s: valid\n", file);
         printf("  particles: %ld (%d shapes, %d materials, %d walls)\n", m.particles, m.shapes,
@@ -317,6 +320,12 @@ static int cmd_validate(int argc, char **argv)
             printf("  memory estimate: %.1f KiB\n", m.memory_bytes / 1024.0);
         else
             printf("  memory estimate: %.1f MiB\n", m.memory_bytes / 1048576.0);
+        printf("  result: %ld frames", m.frames);
+        if (m.mesh_view_bytes > 0)
+            printf("; the particles' surfaces for ParaView add %.1f MiB%s",
+                   m.mesh_view_bytes / 1048576.0,
+                   m.mesh_view_default ? "" : " (written only with run --meshes)");
+        printf("\n");
         if (m.contact_resolution > 0)
             printf("  polyhedral contacts resolved to about %.2g m (64 ulps of the largest "
                    "coordinate in play)\n",
@@ -403,6 +412,8 @@ static int cmd_run(int argc, char **argv)
             quiet = 1;
         } else if (!strcmp(argv[i], "--meshes")) {
             meshes = 1;
+        } else if (!strcmp(argv[i], "--no-meshes")) {
+            meshes = -1;
         } else if (argv[i][0] == '-' && argv[i][1]) {
             return fail("run: unknown option \"%s\"%s", argv[i], "");
         } else if (!file) {
@@ -426,6 +437,16 @@ static int cmd_run(int argc, char **argv)
         fprintf(stderr, "polydem: %s\n", err.msg);
         pd_scenario_destroy(sc);
         return err.code == PD_EINVAL ? EXIT_USAGE : 1;
+    }
+    if (meshes == 0 && !quiet) {
+        pd_scenario_summary m;
+        pd_scenario_summarize(sc, &m);
+        if (!m.mesh_view_default && m.mesh_view_bytes > PD_MESH_VIEW_AUTO_BYTES)
+            fprintf(stderr,
+                    "polydem: note: the particles' surfaces for ParaView are not written (they "
+                    "would add %.0f MiB over %ld frames; --meshes writes them); ParaView shows "
+                    "points\n",
+                    m.mesh_view_bytes / 1048576.0, m.frames);
     }
     struct sigaction sa;
     memset(&sa, 0, sizeof sa);

@@ -221,7 +221,17 @@ typedef struct pd_scenario_summary {
      * the largest particles, or a wall about its centroid): this many metres at the scenario's
      * precision; 0 without polyhedra. Contact depths below it are not resolved. */
     double contact_resolution;
+    long frames; /* frames the result holds: t = 0, every output_interval, and the end */
+    /* Every particle's mesh in world coordinates at every frame (/xdmf/vertices), which lets
+     * ParaView show the particles' shapes: the bytes it adds to the result file, and whether a run
+     * writes it unless told (pd_run_options.shape_meshes = 0): when some particle is a polyhedron
+     * and it adds at most PD_MESH_VIEW_AUTO_BYTES. */
+    double mesh_view_bytes;
+    int mesh_view_default;
 } pd_scenario_summary;
+
+/* The most bytes of per-frame particle meshes a run writes without being asked (256 MiB). */
+#define PD_MESH_VIEW_AUTO_BYTES (256.0 * 1048576.0)
 
 void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out);
 
@@ -314,7 +324,10 @@ typedef struct pd_run_options {
      * returns PD_ECANCELLED and keeps the frames written so far (pd_progress.result_kept). May
      * be NULL. */
     volatile int *cancel;
-    int shape_meshes; /* also write every particle's world-space mesh per frame for ParaView */
+    /* Every particle's world-space mesh per frame for ParaView: > 0 always, < 0 never, 0 as
+     * pd_scenario_summary.mesh_view_default says (polyhedra present and at most
+     * PD_MESH_VIEW_AUTO_BYTES). */
+    int shape_meshes;
 } pd_run_options;
 
 /*

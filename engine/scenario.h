@@ -104,6 +104,8 @@ void sc_group_sizes(const sc_group *g, double *dmin, double *dmax);
 
 /* The steps a run of `duration` takes at dt (pd_run and pd_scenario_summarize agree on it). */
 long long sc_steps(double duration, double dt);
+/* The steps between two rows or frames `interval` apart at dt (at least 1). */
+long long sc_steps_per(double interval, double dt);
 
 /* Stable time step estimates (scenario_dt.c); see pd_scenario_summary in polydem.h. */
 void sc_dt_estimates(const pd_scenario *s, double *rayleigh, double *hertz, double *stable);

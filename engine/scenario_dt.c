@@ -164,6 +164,12 @@ long long sc_steps(double duration, double dt)
     return (long long)(fabs(x - n) <= 1e-9 * fmax(1, x) ? n : ceil(x));
 }
 
+long long sc_steps_per(double interval, double dt)
+{
+    long long n = (long long)floor(interval / dt * (1 + 1e-12) + 0.5);
+    return n < 1 ? 1 : n;
+}
+
 void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out)
 {
     memset(out, 0, sizeof *out);
@@ -192,6 +198,19 @@ void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out)
         if (s->wall[w].mesh)
             bytes += s->wall[w].mesh->nverts * 3 * r + s->wall[w].mesh->ntris * (12.0 + 14 * r);
     out->memory_bytes = bytes;
+    /* The frames pd_run writes, and the world-space meshes of them all (a sphere is drawn as an
+     * 80-triangle icosphere, 42 vertices; result_h5.c stores vertices in double precision). */
+    long long steps = sc_steps(s->duration, s->dt), every = sc_steps_per(s->output_interval, s->dt);
+    out->frames = (long)(steps / every + 1 + (steps % every != 0));
+    double nv = 0;
+    int polyhedra = 0;
+    for (int i = 0; i < s->ngroup; i++) {
+        const sc_shape *sh = &s->shape[s->group[i].shape];
+        nv += (double)s->group[i].count * (sh->mesh ? sh->mesh->nverts : 42);
+        polyhedra |= sh->mesh != NULL && s->group[i].count > 0;
+    }
+    out->mesh_view_bytes = nv * 3 * sizeof(double) * (double)out->frames;
+    out->mesh_view_default = polyhedra && out->mesh_view_bytes <= PD_MESH_VIEW_AUTO_BYTES;
     /*
      * The overlap's snapping resolution (kernels/overlap.h: OVL_SNAP = 64 ulps of the largest
      * coordinate in play, in a particle's frame): two of the largest polyhedra side by side, or a

@@ -75,7 +75,13 @@ static int open_result(sim *m, const pd_run_options *opt, rh5_writer **out, pd_e
     int fields = 0;
     if (s->output_fields & SC_OUT_VELOCITY) fields |= RH5_VELOCITY;
     if (s->output_fields & SC_OUT_ANGULAR) fields |= RH5_ANGULAR_VELOCITY;
-    if (opt->shape_meshes) fields |= RH5_SHAPE_MESHES;
+    int meshes = opt->shape_meshes;
+    if (meshes == 0) {
+        pd_scenario_summary sm;
+        pd_scenario_summarize(s, &sm);
+        meshes = sm.mesh_view_default;
+    }
+    if (meshes > 0) fields |= RH5_SHAPE_MESHES;
     rh5_writer *w;
     int rc = rh5_create(opt->output_path, s->json ? s->json : "{}", s->double_precision, s->dt,
                         fields, &w, err);
@@ -196,12 +202,6 @@ static energy_budget energy_of(const sim *m, double ke0, int stored)
 
 /* An interval in whole steps, at least one: the nearest, halves up even where the quotient
  * rounds below them (0.00015 / 1e-4 = 1.4999999999999998: every 2 steps, not every step). */
-static long long steps_per(double interval, double dt)
-{
-    long long n = (long long)floor(interval / dt * (1 + 1e-12) + 0.5);
-    return n < 1 ? 1 : n;
-}
-
 /* Energy a run may reach at time t without something being wrong: 10x what it can supply. */
 static double energy_bound(const energy_budget *b, double t)
 {
@@ -302,8 +302,8 @@ int pd_run(pd_device *dev, const pd_scenario *s, const pd_run_options *opt, pd_p
     if ((rc = open_result(m, opt, &w, err)) != PD_OK) goto done;
 
     long long steps = sc_steps(s->duration, s->dt);
-    long long stats_every = steps_per(s->stats_interval, s->dt);
-    long long frame_every = steps_per(s->output_interval, s->dt);
+    long long stats_every = sc_steps_per(s->stats_interval, s->dt);
+    long long frame_every = sc_steps_per(s->output_interval, s->dt);
     pr.steps_total = steps;
     pr.sim_duration = (double)steps * s->dt;
     pr.particles = m->n;

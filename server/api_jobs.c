@@ -260,14 +260,15 @@ static int parse_submission(http_req *r, submission *sub, enum MHD_Result *ret)
 
 static json_t *summary_json(const pd_scenario_summary *m)
 {
-    return json_pack("{s:I, s:i, s:i, s:i, s:o, s:o, s:I, s:o, s:o, s:o, s:o, s:o}", "particles",
-                     (json_int_t)m->particles, "shapes", m->shapes, "materials", m->materials,
-                     "walls", m->walls, "dt", job_json_real(m->dt), "duration",
-                     job_json_real(m->duration), "steps", (json_int_t)m->steps, "dt_rayleigh",
-                     job_json_real(m->dt_rayleigh), "dt_hertz", job_json_real(m->dt_hertz),
-                     "dt_stable", job_json_real(m->dt_stable), "memory_bytes",
-                     job_json_real(m->memory_bytes), "contact_resolution_m",
-                     job_json_real(m->contact_resolution));
+    return json_pack(
+        "{s:I, s:i, s:i, s:i, s:o, s:o, s:I, s:o, s:o, s:o, s:o, s:o, s:I, s:o, s:b}", "particles",
+        (json_int_t)m->particles, "shapes", m->shapes, "materials", m->materials, "walls", m->walls,
+        "dt", job_json_real(m->dt), "duration", job_json_real(m->duration), "steps",
+        (json_int_t)m->steps, "dt_rayleigh", job_json_real(m->dt_rayleigh), "dt_hertz",
+        job_json_real(m->dt_hertz), "dt_stable", job_json_real(m->dt_stable), "memory_bytes",
+        job_json_real(m->memory_bytes), "contact_resolution_m",
+        job_json_real(m->contact_resolution), "frames", (json_int_t)m->frames, "mesh_view_bytes",
+        job_json_real(m->mesh_view_bytes), "mesh_view_default", m->mesh_view_default);
 }
 
 enum MHD_Result api_validate(http_req *r)

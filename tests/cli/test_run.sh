@@ -67,6 +67,40 @@ if h5dump -a /format "$tmp/drop.h5" 2>/dev/null | grep -q '"polydem-result"'; th
 else bad result_format_attribute "$(h5dump -a /format "$tmp/drop.h5" 2>&1 | head -5)"; fi
 if xmllint --noout "$tmp/drop.h5.xmf" 2>"$tmp/x"; then ok xdmf_well_formed; else bad xdmf_well_formed "$(cat "$tmp/x")"; fi
 
+# ParaView shows the polyhedra's shapes by default (issue 3): with a polyhedron in the scene every
+# particle's surface is written per frame (a sphere's 80-triangle icosphere has 42 vertices, the
+# Schonhardt prism 6) and the XDMF file draws it; --no-meshes leaves points only, and so does a
+# scene of spheres alone. `validate --json` predicts the frames and the bytes.
+if tr -s ' ' <"$tmp/ls" | grep -qF "/xdmf/vertices Dataset {5/Inf, 48, 3}" &&
+    grep -q "xdmf/vertices" "$tmp/drop.h5.xmf"; then
+    ok meshes_written_by_default
+else bad meshes_written_by_default "$(grep xdmf "$tmp/ls")"; fi
+$POLYDEM validate "$tmp/drop.json" --json >"$tmp/v" 2>&1
+if python3 -c 'import json,sys; d = json.load(open(sys.argv[1]))
+sys.exit(not (d["frames"] == 5 and d["mesh_view_bytes"] == 5 * 48 * 3 * 8 and d["mesh_view_default"] is True))' "$tmp/v"; then
+    ok validate_predicts_frames_and_meshes
+else bad validate_predicts_frames_and_meshes "$(cat "$tmp/v")"; fi
+$POLYDEM run "$tmp/drop.json" -o "$tmp/nomesh.h5" --quiet --no-meshes >"$tmp/out" 2>&1
+if [ $? -eq 0 ] && ! h5ls -r "$tmp/nomesh.h5" | grep -q "/xdmf/vertices" && ! grep -q "xdmf/vertices" "$tmp/nomesh.h5.xmf"; then
+    ok no_meshes_flag
+else bad no_meshes_flag "$(cat "$tmp/out"; h5ls -r "$tmp/nomesh.h5" | grep xdmf)"; fi
+python3 -c 'import json,sys; d = json.load(open(sys.argv[1])); d["particles"] = d["particles"][:1]
+json.dump(d, open(sys.argv[2], "w"))' "$tmp/drop.json" "$tmp/balls.json"
+$POLYDEM run "$tmp/balls.json" -o "$tmp/balls.h5" --quiet >"$tmp/out" 2>&1
+if [ $? -eq 0 ] && ! h5ls -r "$tmp/balls.h5" | grep -q "/xdmf/vertices"; then
+    ok spheres_alone_are_points
+else bad spheres_alone_are_points "$(cat "$tmp/out"; h5ls -r "$tmp/balls.h5" | grep xdmf)"; fi
+
+# the same scenario run twice, in two processes, gives bit-identical frames and physics rows
+# (issue 3: deterministic gather, no floating-point atomics); only the wall-clock rows differ
+$POLYDEM run "$tmp/drop.json" -o "$tmp/again.h5" --quiet >"$tmp/out" 2>&1
+same=""
+for obj in /frames /stats/kinetic_energy /stats/contacts /stats/broad_pairs /stats/max_overlap_ratio \
+    /stats/wall_force/floor /xdmf/vertices; do
+    h5diff "$tmp/drop.h5" "$tmp/again.h5" "$obj" "$obj" >"$tmp/d" 2>&1 || same="$same [$obj: $(head -3 "$tmp/d")]"
+done
+if [ -z "$same" ]; then ok reruns_bit_identical_across_processes; else bad reruns_bit_identical_across_processes "$same"; fi
+
 # while the ball is on the floor (it lands at once and bounces off within ~1 ms at 0.5 m/s),
 # the force it exerts on the floor, as a load cell in the floor reads it, points down
 h5dump -d /stats/wall_force/floor -s "1,0" -c "1,3" "$tmp/drop.h5" >"$tmp/wf" 2>&1

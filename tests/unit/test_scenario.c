@@ -566,6 +566,50 @@ TEST(contact_resolution_follows_precision_and_walls)
     }
 }
 
+/* The result's frame count (t = 0, every output_interval, the end) and the per-frame particle
+ * surfaces for ParaView: written by default for polyhedra up to PD_MESH_VIEW_AUTO_BYTES. */
+TEST(mesh_view_follows_frames_and_shapes)
+{
+    const char *fmt =
+        "{\"time\": {\"dt\": 1e-6, \"duration\": %s, \"output_interval\": %s},"
+        "\"materials\": {\"rock\": {\"density\": 2600, \"youngs_modulus\": 2e7}},"
+        "\"interactions\": [{\"between\": [\"rock\", \"rock\"]}],"
+        "\"shapes\": {\"c\": %s},"
+        "\"particles\": [{\"shape\": \"c\", \"material\": \"rock\", \"count\": 10, \"size\": 0.01,"
+        " \"region\": {\"min\": [0,0,0], \"max\": [0.1,0.1,0.1]}}]}";
+    struct {
+        const char *duration, *interval, *shape;
+        long frames;
+        double vertices; /* per particle */
+        int written;
+    } cases[] = {
+        {"0.01", "0.001", "{\"builtin\": \"schonhardt\"}", 11, 6, 1},
+        {"0.0105", "0.001", "{\"builtin\": \"schonhardt\"}", 12, 6, 1}, /* the end's frame */
+        {"0.01", "0.001", "{\"sphere\": {}}", 11, 42, 0},               /* points suffice */
+        /* 10 x 642 vertices x 24 bytes x 10 001 frames = 1.5 GB, over the 256 MiB default */
+        {"0.01", "1e-6", "{\"builtin\": \"icosphere\", \"triangles\": 1280}", 10001, 642, 0},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        char text[2048];
+        pd_diags d;
+        snprintf(text, sizeof text, fmt, cases[k].duration, cases[k].interval, cases[k].shape);
+        pd_scenario *s = parse(text, &d);
+        CHECK(s != NULL);
+        if (!s) {
+            pd_diags_free(&d);
+            continue;
+        }
+        pd_scenario_summary sum;
+        pd_scenario_summarize(s, &sum);
+        CHECK_EQ_INT(cases[k].frames, sum.frames);
+        CHECK_REL(10 * cases[k].vertices * 3 * 8 * (double)cases[k].frames, sum.mesh_view_bytes,
+                  1e-15);
+        CHECK_EQ_INT(cases[k].written, sum.mesh_view_default);
+        pd_scenario_destroy(s);
+        pd_diags_free(&d);
+    }
+}
+
 TEST(unstable_dt_is_refused_with_the_estimate)
 {
     /* spheres of 1 cm, E = 2e7 Pa, nu = 0.25 (G = 8e6 Pa), rho = 2600, moving at 1 m/s without
@@ -621,5 +665,6 @@ int main(void)
     RUN(empty_scenario_is_invalid_not_out_of_memory);
     RUN(unstable_dt_is_refused_with_the_estimate);
     RUN(contact_resolution_follows_precision_and_walls);
+    RUN(mesh_view_follows_frames_and_shapes);
     return TEST_DONE();
 }
