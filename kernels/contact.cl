@@ -109,10 +109,7 @@ __kernel void contact_forces(
             info[c] = -2.0f;
             continue;
         } else if (fresh) {
-            /* the carried pairs of the same first body: a few entries to search, not all */
-            int lo = carry_offset[ch_first(k)],
-                j = ch_find(carry_keys + lo, carry_offset[ch_first(k) + 1] - lo, k);
-            j = j >= 0 ? lo + j : -1;
+            int j = ch_carried(carry_keys, carry_offset, k);
             pd_v3 s0 = j >= 0 ? v3_load(carry_spring, j) : v3(0, 0, 0),
                   p0 = j >= 0 && carry_point ? v3_load(carry_point, j) : v3(0, 0, 0);
             pd_real kt0 = j >= 0 ? carry_kt[j] : PD_R(0),

@@ -80,17 +80,17 @@ PD_FN int ch_has_state(PD_GLOBAL const pd_real *spring, PD_GLOBAL const pd_real 
 }
 
 /*
- * Carries contact i's tangential spring (3 reals) and stiffness from the last step's arrays, or
- * starts it at zero for a new contact.
+ * Where pair k's carried state is in the arrays history_keep (contact.cl) fills when a pair list
+ * is rebuilt: the carried pairs of each first body p are carry_keys[carry_offset[p] ..
+ * carry_offset[p+1]), sorted, so the search covers a few entries, not all. Returns the index
+ * into the carry arrays, or -1 for a pair that carried nothing (a new contact: zero state).
  */
-PD_FN void ch_carry(PD_GLOBAL const ch_key *old_keys, int n_old,
-                    PD_GLOBAL const pd_real *old_spring, PD_GLOBAL const pd_real *old_kt, ch_key k,
-                    PD_GLOBAL pd_real *spring, PD_GLOBAL pd_real *kt, int i)
+PD_FN int ch_carried(PD_GLOBAL const ch_key *carry_keys, PD_GLOBAL const int *carry_offset,
+                     ch_key k)
 {
-    int j = ch_find(old_keys, n_old, k);
-    for (int c = 0; c < 3; c++)
-        spring[3 * i + c] = j >= 0 ? old_spring[3 * j + c] : PD_R(0);
-    kt[i] = j >= 0 ? old_kt[j] : PD_R(0);
+    int lo = carry_offset[ch_first(k)];
+    int j = ch_find(carry_keys + lo, carry_offset[ch_first(k) + 1] - lo, k);
+    return j >= 0 ? lo + j : -1;
 }
 
 /*

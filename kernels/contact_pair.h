@@ -411,14 +411,15 @@ PD_FN int cp_apart(const cp_world *wd, ch_key key)
  * turn about the normal an impact gave it (2 rad/s for seconds in examples/cube_lattice.json),
  * and its rocking was damped only through the shift of its contact point, quadratic in the
  * amplitude (docs/VERIFICATION.md, known limits).
- *   wrel    w_b - w_a, rad/s;  fn the normal force, N;  kt0 last step's k_t (k_t = 8 G* a, so
- *           last step's radius is k_t0 / (8 G*));  *twist in/out: the twisting spring, N m.
+ *   wrel    w_b - w_a, rad/s;  fn the normal force, N;  kt, kt0 this and last step's k_t
+ *           (eq. 4.18, k_t = 8 G* a: the radii are k_t / (8 G*));  *twist in/out: the twisting
+ *           spring, N m.
  */
 PD_FN pd_v3 cp_couple(const cp_world *wd, PD_GLOBAL const pd_real *pr, pd_v3 n, pd_v3 wrel,
-                      pd_real vol, pd_real delta, pd_real eta_n, pd_real eta_t, pd_real fn,
-                      pd_real kt0, int loading, pd_real *twist)
+                      pd_real kt, pd_real eta_n, pd_real eta_t, pd_real fn, pd_real kt0,
+                      int loading, pd_real *twist)
 {
-    pd_real rad = PD_SQRT(vol / (CF_PI * delta)), r2 = rad * rad;
+    pd_real rad = kt / (PD_R(8) * pr[CP_GSTAR]), r2 = rad * rad; /* eq. 4.18: k_t = 8 G* a */
     pd_real spin = v3_dot(wrel, n);
     pd_v3 m = v3_scale(v3_sub(wrel, v3_scale(n, spin)), -eta_n * r2 / PD_R(4));
     pd_real ktw = cf_twist_stiffness(pr[CP_GTWIST], rad);
@@ -589,7 +590,7 @@ PD_FN void cp_pair(const cp_world *wd, ch_key key, pd_v3 spring0, pd_real kt0, p
         f = v3_add(v3_scale(n, fn), ft);
         if (volumetric && !linear && pr[CP_GTWIST] > PD_R(0)) { /* "contact_moments" */
             pd_real tw = twist0;
-            res->couple = cp_couple(wd, pr, n, v3_sub(wb, wa), vol, delta,
+            res->couple = cp_couple(wd, pr, n, v3_sub(wb, wa), kt,
                                     PD_R(2) * pr[CP_GAMMA] * PD_SQRT(mstar * kn), damp,
                                     fn > PD_R(0) ? fn : PD_R(0), kt0, loading, &tw);
             res->twist = tw;

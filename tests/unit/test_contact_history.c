@@ -35,18 +35,16 @@ TEST(keys_and_lookup)
 
 TEST(history_follows_the_pair_not_the_slot)
 {
-    /* last step: three contacts with springs; this step: one ended, one new, order changed */
-    ch_key old_k[3] = {ch_make(0, 1), ch_make(0, 2), ch_make(1, 2)};
-    double old_s[9] = {1, 2, 3, 4, 5, 6, 7, 8, 9}, old_kt[3] = {10, 20, 30};
-    ch_key new_k[3] = {ch_make(0, 2), ch_make(1, 2), ch_make(1, 3)};
-    double s[9], kt[3];
-    for (int i = 0; i < 3; i++)
-        ch_carry(old_k, 3, old_s, old_kt, new_k[i], s, kt, i);
-    CHECK_NEAR(4, s[0], 0);
-    CHECK_NEAR(20, kt[0], 0);
-    CHECK_NEAR(9, s[5], 0);
-    CHECK_NEAR(30, kt[1], 0);
-    CHECK_NEAR(0, s[6] + s[7] + s[8] + kt[2], 0); /* a new contact starts unloaded */
+    /* the last list's pairs that carried state, by first body (particles 0..3: 0 has two, 1 one,
+     * 2 and 3 none); this step: one ended, one new, order changed */
+    ch_key carry_k[3] = {ch_make(0, 1), ch_make(0, 2), ch_make(1, 2)};
+    int carry_off[5] = {0, 2, 3, 3, 3};
+    ch_key new_k[4] = {ch_make(0, 2), ch_make(1, 2), ch_make(1, 3), ch_make(2, 3)};
+    int want[4] = {1, 2, -1, -1};
+    for (int i = 0; i < 4; i++)
+        CHECK_EQ_INT(want[i], ch_carried(carry_k, carry_off, new_k[i]));
+    /* a key of another first body is not found in a segment it is not in */
+    CHECK_EQ_INT(-1, ch_carried(carry_k, carry_off, ch_make(1, 0)));
 }
 
 TEST(gather_equals_the_direct_sum_exactly)
