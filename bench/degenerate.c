@@ -14,6 +14,9 @@
  * Every pair runs with the half-plane filter on and off, as given and turned by one random
  * rotation moved up to 3 m away (both boxes, so their relative configuration stays).
  *
+ * After the table, the wrong trials by how far off the volume is (relative; a miss counts as 1),
+ * or "centroid only" where the volume is right.
+ *
  * usage: build/bench/degenerate [--trials N]   (default 3000 per scale and frame)
  */
 #include <math.h>
@@ -40,6 +43,18 @@ static pd_mesh *box(const double lo[3], const double hi[3])
     pd_error err = {0};
     if (pd_mesh_box(lo, hi, &m, &err) != PD_OK) fprintf(stderr, "degenerate: box: %s\n", err.msg);
     return m;
+}
+
+/* How wrong the wrong results are: the largest relative volume error of each trial's worse
+ * result (a miss, or a hit where there is no overlap, counts as 1), in decades. */
+enum { NBAND = 5 };
+static const char *const band_name[NBAND] = {"< 1e-6", "1e-6 - 1e-3", "1e-3 - 0.1", ">= 0.1",
+                                             "centroid only"};
+static long band_count[NBAND];
+
+static int band_of(double rel)
+{
+    return rel < 1e-6 ? 0 : rel < 1e-3 ? 1 : rel < 0.1 ? 2 : 3;
 }
 
 /* One trial: returns which results are wrong (bit 0: filter on, bit 1: off), -1 on an error. */
@@ -85,7 +100,8 @@ static int trial(double scale, int turned)
     pd_quat_to_matrix(p.q, R);
     for (int i = 0; i < 3; i++)
         cw[i] = R[i][0] * c[0] + R[i][1] * c[1] + R[i][2] * c[2] + p.x[i];
-    int wrong = 0;
+    int wrong = 0, vol_wrong = 0;
+    double worst = 0;
     for (int f = 0; f < 2 && ma && mb; f++) {
         pd_contact o;
         pd_error err = {0};
@@ -96,10 +112,16 @@ static int trial(double scale, int turned)
         }
         double vo = o.hit ? o.volume : 0;
         int bad = !(fabs(vo - v) <= 1e-9 * v + 1e-12);
+        if (bad) {
+            double rel = v > 0 && vo > 0 ? fabs(vo - v) / v : 1;
+            worst = rel > worst ? rel : worst;
+            vol_wrong = 1;
+        }
         for (int k = 0; k < 3 && v > 1e-9; k++)
             bad |= !(fabs(o.centroid[k] - cw[k]) <= 1e-9 + 1e-14 / v);
         wrong |= bad << f;
     }
+    if (wrong > 0) band_count[vol_wrong ? band_of(worst) : NBAND - 1]++;
     if (!ma || !mb) wrong = -1;
     pd_mesh_destroy(ma);
     pd_mesh_destroy(mb);
@@ -141,5 +163,9 @@ int main(int argc, char **argv)
             fflush(stdout);
         }
     }
+    printf("\nwrong trials by the worse result's relative volume error (all rows):\n\n");
+    printf("| volume error | trials |\n|---|---|\n");
+    for (int b = 0; b < NBAND; b++)
+        printf("| %s | %ld |\n", band_name[b], band_count[b]);
     return 0;
 }

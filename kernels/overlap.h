@@ -1332,26 +1332,6 @@ refilter:
     pd_real vol = sm.vol, smag = sm.smag;
     pd_v3 mom = sm.mom, sdiff = sm.sdiff;
     int degenerate = c->degenerate;
-    /* touching, or round-off of a touching contact: within 100 ulps of the cusps' magnitudes */
-    if (!(vol > PD_R(100) * PD_EPS * sm.vol_abs)) {
-        ovl_miss(o, c);
-        return 1;
-    }
-    /*
-     * A n B is a polyhedron whose corners are the nodes, so it lies in their box. A volume beyond
-     * the box's (and the sums' rounding) means the predicates disagreed about the geometry: seen
-     * in single precision for faces resting on a wall's within about the resolution pad, where
-     * some corners are snapped onto the other's plane and others not, and the cusps no longer
-     * close a surface (a 2 cm prism got a force of 3 600 N). No force can be taken from such a
-     * sum, so the contact counts as not yet touching, as when it lies within the resolution.
-     */
-    if (nodes_known) {
-        pd_v3 ext = v3_sub(nhi, nlo);
-        if (vol > ext.x * ext.y * ext.z + PD_R(1000) * PD_EPS * sm.vol_abs) {
-            ovl_miss(o, c);
-            return 1;
-        }
-    }
     *pad_out = c->pad;
     /*
      * The overlap's surface is A's faces inside B and B's faces inside A, and a closed surface's
@@ -1360,8 +1340,41 @@ refilter:
      * the coordinates in others: faces near-coplanar in two directions at once, each just inside
      * the tie band; bench/degenerate), and the cusps' sums are no overlap at all: in a lattice of
      * stacked cubes one contact 1.2e-7 m deep got its centroid 34 m away and a depth of 1 mm.
+     * The misses below are no answer either when the surface is open: ovl_compute tries again
+     * (two boxes with faces coplanar in z and 1.9e-14 m apart in x overlapping by 0.69 m^3 came
+     * out as a miss, the sum exceeding the nodes' box).
      */
     int closed = !(sm.open > PD_R(1e4) * PD_EPS * smag);
+    /* touching, or round-off of a touching contact: within 100 ulps of the cusps' magnitudes */
+    if (!(vol > PD_R(100) * PD_EPS * sm.vol_abs)) {
+        ovl_miss(o, c);
+        return closed;
+    }
+    /*
+     * A n B is a polyhedron whose corners are the nodes, so it lies in their box. A volume beyond
+     * the box's (and the sums' rounding) means the predicates disagreed about the geometry: seen
+     * in single precision for faces resting on a wall's within about the resolution pad, where
+     * some corners are snapped onto the other's plane and others not, and the cusps no longer
+     * close a surface (a 2 cm prism got a force of 3 600 N). No force can be taken from such a
+     * sum: ovl_compute takes the overlap again on B moved, and where that does not help either,
+     * the contact counts as not yet touching, as when it lies within the resolution.
+     */
+    if (nodes_known) {
+        pd_v3 ext = v3_sub(nhi, nlo);
+        if (vol > ext.x * ext.y * ext.z + PD_R(1000) * PD_EPS * sm.vol_abs) {
+            ovl_miss(o, c);
+            return 0;
+        }
+    }
+    /* The same of the two solids' boxes' intersection (their kept parts' with the filter), which
+     * holds A n B whatever the nodes: without the filter, two boxes with faces coplanar or
+     * within the tie band along all three axes gave a closed surface of 2.5 times their overlap,
+     * whose stray nodes had widened the nodes' box (bench/degenerate). */
+    pd_v3 bext = v3_sub(c->box_hi, c->box_lo);
+    if (vol > bext.x * bext.y * bext.z + PD_R(1000) * PD_EPS * sm.vol_abs) {
+        ovl_miss(o, c);
+        return 0;
+    }
     o->hit = 1;
     o->degenerate = degenerate;
     o->kept_a = c->na;
@@ -1402,7 +1415,8 @@ refilter:
 
 /*
  * The overlap of A and B: volume, centroid, normal and depth (section 4.2). Where the
- * predicates disagree (ovl_compute_try), B is moved by 8 resolutions along one of three fixed
+ * predicates disagree (ovl_compute_try: the surface does not close, or the volume exceeds the
+ * nodes' box), B is moved by 8 resolutions along one of three fixed
  * directions of unrelated components and the overlap taken again: offsets that lay at the edge
  * of the tie band (2 resolutions) are then either well inside it or well out of it, and 8
  * resolutions (5e-16 m for 2 cm particles) change no force measurably. Where none of three
