@@ -104,7 +104,13 @@ void sc_group_sizes(const sc_group *g, double *dmin, double *dmax);
 
 /* The steps a run of `duration` takes at dt (pd_run and pd_scenario_summarize agree on it). */
 long long sc_steps(double duration, double dt);
-/* The steps between two rows or frames `interval` apart at dt (at least 1). */
+
+/* How the result file draws a sphere (pd_run's shapes, pd_scenario_summarize's sizes): an
+ * icosphere of this many triangles, with this many vertices. */
+#define SC_SPHERE_VIEW_TRIANGLES 80
+#define SC_SPHERE_VIEW_VERTICES 42
+/* An interval in whole steps, at least one: the nearest, halves up even where the quotient
+ * rounds below them (0.00015 / 1e-4 = 1.4999999999999998: every 2 steps, not every step). */
 long long sc_steps_per(double interval, double dt);
 
 /* Stable time step estimates (scenario_dt.c); see pd_scenario_summary in polydem.h. */

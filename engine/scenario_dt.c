@@ -198,15 +198,15 @@ void pd_scenario_summarize(const pd_scenario *s, pd_scenario_summary *out)
         if (s->wall[w].mesh)
             bytes += s->wall[w].mesh->nverts * 3 * r + s->wall[w].mesh->ntris * (12.0 + 14 * r);
     out->memory_bytes = bytes;
-    /* The frames pd_run writes, and the world-space meshes of them all (a sphere is drawn as an
-     * 80-triangle icosphere, 42 vertices; result_h5.c stores vertices in double precision). */
+    /* The frames pd_run writes, and the world-space meshes of them all (a sphere drawn as an
+     * icosphere, SC_SPHERE_VIEW_*; result_h5.c stores vertices in double precision). */
     long long steps = sc_steps(s->duration, s->dt), every = sc_steps_per(s->output_interval, s->dt);
     out->frames = (long)(steps / every + 1 + (steps % every != 0));
     double nv = 0;
     int polyhedra = 0;
     for (int i = 0; i < s->ngroup; i++) {
         const sc_shape *sh = &s->shape[s->group[i].shape];
-        nv += (double)s->group[i].count * (sh->mesh ? sh->mesh->nverts : 42);
+        nv += (double)s->group[i].count * (sh->mesh ? sh->mesh->nverts : SC_SPHERE_VIEW_VERTICES);
         polyhedra |= sh->mesh != NULL && s->group[i].count > 0;
     }
     out->mesh_view_bytes = nv * 3 * sizeof(double) * (double)out->frames;

@@ -90,8 +90,10 @@ static int open_result(sim *m, const pd_run_options *opt, rh5_writer **out, pd_e
     for (int i = 0; i < s->nshape && rc == PD_OK; i++) {
         const sc_shape *sh = &s->shape[i];
         if (sh->kind == SC_SHAPE_SPHERE) {
-            /* display tessellation: an 80-triangle icosphere of diameter 1 */
-            if (!ball && (rc = pd_mesh_builtin("icosphere", 80, 0, &ball, err)) != PD_OK) break;
+            /* display tessellation: an icosphere of diameter 1 (scenario.h) */
+            if (!ball && (rc = pd_mesh_builtin("icosphere", SC_SPHERE_VIEW_TRIANGLES, 0, &ball,
+                                               err)) != PD_OK)
+                break;
             double *v = malloc(sizeof(double) * 3 * (size_t)ball->nverts);
             if (!v) {
                 rc = pd_error_set(err, PD_ENOMEM, "run: out of memory");
@@ -200,8 +202,6 @@ static energy_budget energy_of(const sim *m, double ke0, int stored)
     return b;
 }
 
-/* An interval in whole steps, at least one: the nearest, halves up even where the quotient
- * rounds below them (0.00015 / 1e-4 = 1.4999999999999998: every 2 steps, not every step). */
 /* Energy a run may reach at time t without something being wrong: 10x what it can supply. */
 static double energy_bound(const energy_budget *b, double t)
 {
