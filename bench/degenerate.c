@@ -3,12 +3,11 @@
  * of each other's: the contact geometry of particles stacked in a lattice, resting in a corner,
  * or flush against a wall.
  *
- * Each trial takes two axis-aligned boxes of sides 0.5 to 1.5 m, and along each axis puts B
- * either at a generic overlap, with its lower or its upper face offset from A's by a random
- * delta within +-scale (0 a third of the time), or shallow (1 mm at most) with such an offset. The
- * exact overlap is a box: its volume and centroid are the reference. A result counts as wrong
- * when its volume is off by more than 1e-9 relative (plus 1e-12 m^3) or its centroid by more than
- * 1e-9 m plus 1e-14 m^4 / V (the cusp sums' rounding, which grows as the overlap shrinks).
+ * Each trial takes two axis-aligned boxes with faces offset by up to +-scale along each axis
+ * (tests/box_pairs.h, which tests/physics/test_overlap.c samples too). The exact overlap is a
+ * box: its volume and centroid are the reference. A result counts as wrong when its volume is
+ * off by more than 1e-9 relative (plus 1e-12 m^3) or its centroid by more than 1e-9 m plus
+ * 1e-14 m^4 / V (the cusp sums' rounding, which grows as the overlap shrinks).
  * The predicates snap a distance within 2 resolutions (about 4e-14 m for these sizes) to a tie
  * (kernels/overlap_predicates.h), so scales near that band are the ones that find trouble.
  * Every pair runs with the half-plane filter on and off, as given and turned by one random
@@ -25,6 +24,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../tests/box_pairs.h"
 #include "polydem.h"
 
 static uint64_t rng = 0x12345678abcdefull;
@@ -60,31 +60,10 @@ static int band_of(double rel)
 /* One trial: returns which results are wrong (bit 0: filter on, bit 1: off), -1 on an error. */
 static int trial(double scale, int turned)
 {
-    double a[3], b[3], lo[3], zero[3] = {0, 0, 0};
-    for (int k = 0; k < 3; k++) {
-        a[k] = 0.5 + rnd();
-        b[k] = 0.5 + rnd();
-    }
-    for (int k = 0; k < 3; k++) {
-        int mode = (int)(rnd() * 4);
-        double e = rnd() < 1.0 / 3 ? 0 : scale * (2 * rnd() - 1);
-        if (mode == 0)
-            lo[k] = a[k] - 0.3 * rnd() * fmin(a[k], b[k]);
-        else if (mode == 1)
-            lo[k] = e; /* lower faces within e */
-        else if (mode == 2)
-            lo[k] = a[k] - b[k] + e; /* upper faces within e */
-        else
-            lo[k] = a[k] - 1e-3 * rnd() + (rnd() < 0.2 ? e : 0); /* shallow */
-    }
-    double hi[3] = {lo[0] + b[0], lo[1] + b[1], lo[2] + b[2]};
-    pd_mesh *ma = box(zero, a), *mb = box(lo, hi);
-    double v = 1, c[3];
-    for (int k = 0; k < 3; k++) {
-        double l = fmax(0, lo[k]), h = fmin(a[k], hi[k]);
-        v *= fmax(0, h - l);
-        c[k] = (l + h) / 2;
-    }
+    box_pair bp;
+    box_pair_draw(&bp, scale, rnd);
+    double zero[3] = {0, 0, 0};
+    pd_mesh *ma = box(zero, bp.a), *mb = box(bp.lo, bp.hi);
     pd_pose p = {{0, 0, 0}, {1, 0, 0, 0}};
     if (turned) {
         double q[4] = {1 + rnd(), rnd() - 0.5, rnd() - 0.5, rnd() - 0.5}, n = 0;
@@ -96,10 +75,6 @@ static int trial(double scale, int turned)
         p.x[1] = -2 * rnd();
         p.x[2] = rnd();
     }
-    double R[3][3], cw[3];
-    pd_quat_to_matrix(p.q, R);
-    for (int i = 0; i < 3; i++)
-        cw[i] = R[i][0] * c[0] + R[i][1] * c[1] + R[i][2] * c[2] + p.x[i];
     int wrong = 0, vol_wrong = 0;
     double worst = 0;
     for (int f = 0; f < 2 && ma && mb; f++) {
@@ -110,16 +85,13 @@ static int trial(double scale, int turned)
             wrong = -1;
             break;
         }
-        double vo = o.hit ? o.volume : 0;
-        int bad = !(fabs(vo - v) <= 1e-9 * v + 1e-12);
-        if (bad) {
-            double rel = v > 0 && vo > 0 ? fabs(vo - v) / v : 1;
+        double rel;
+        int bad = box_pair_wrong(&bp, &p, &o, &rel);
+        if (bad & 1) {
             worst = rel > worst ? rel : worst;
             vol_wrong = 1;
         }
-        for (int k = 0; k < 3 && v > 1e-9; k++)
-            bad |= !(fabs(o.centroid[k] - cw[k]) <= 1e-9 + 1e-14 / v);
-        wrong |= bad << f;
+        wrong |= (bad != 0) << f;
     }
     if (wrong > 0) band_count[vol_wrong ? band_of(worst) : NBAND - 1]++;
     if (!ma || !mb) wrong = -1;

@@ -672,9 +672,12 @@ PD_FN void ovl_pass(ovl_ctx *c)
             int t = near[k];
             int id[3] = {tri[3 * t], tri[3 * t + 1], tri[3 * t + 2]};
             if (!((st[id[0]] | st[id[1]] | st[id[2]]) & OVL_V_INSIDE)) continue;
-            ovl_tri V;
-            ovl_tri_make(&V, ovl_vx(c, side, id[0]), ovl_vx(c, side, id[1]), ovl_vx(c, side, id[2]),
-                         c->pad);
+            ovl_tri V; /* its box is not needed */
+            V.p[0] = ovl_vx(c, side, id[0]);
+            V.p[1] = ovl_vx(c, side, id[1]);
+            V.p[2] = ovl_vx(c, side, id[2]);
+            V.nraw = v3_cross(v3_sub(V.p[1], V.p[0]), v3_sub(V.p[2], V.p[0]));
+            V.full = 0;
             ovl_tri_full(&V);
             for (int q = 0; q < 3; q++) {
                 if (!(st[id[q]] & OVL_V_INSIDE)) continue;
@@ -1022,6 +1025,30 @@ PD_FN void ovl_rescue(ovl_ctx *c, ovl_sums *sm)
  * disagree about the geometry (the overlap's surface does not close), 1 otherwise; *pad: the
  * resolution it worked at.
  */
+/*
+ * Lists in out the vertices whose projections reach into the other's half-plane (sgn 1: proj >= e,
+ * -1: proj <= e), without a branch, in two runs of independent counts (the halves of the
+ * vertices, joined at the end); returns their number. out holds n.
+ */
+PD_FN int ovl_beyond(PD_GLOBAL const pd_real *proj, int n, pd_real e, int sgn, PD_GLOBAL int *out)
+{
+    int h = n / 2, n0 = 0, n1 = 0;
+    pd_real es = sgn * e;
+    for (int i = 0; i < h; i++) {
+        out[n0] = i;
+        out[h + n1] = h + i;
+        n0 += sgn * proj[i] >= es;
+        n1 += sgn * proj[h + i] >= es;
+    }
+    if (n & 1) {
+        out[h + n1] = n - 1;
+        n1 += sgn * proj[n - 1] >= es;
+    }
+    for (int k = 0; k < n1; k++)
+        out[n0 + k] = out[h + k];
+    return n0 + n1;
+}
+
 PD_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out)
 {
     *pad_out = PD_R(0);
@@ -1083,27 +1110,58 @@ PD_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out)
     pd_real trd = in->tr[0] * d.x + in->tr[1] * d.y + in->tr[2] * d.z;
 
     /* eq. 5.4: extents; eq. 5.5: keep the triangles reaching into the other's half-plane */
-    /* The two loops over every vertex are the part of a pair's cost that grows with the meshes
-     * whatever the overlap: locals, not c's fields (which the stores might alias), and max
-     * instructions rather than branches keep them to a few instructions a vertex. */
+    /*
+     * The two loops over every vertex are the part of a pair's cost that grows with the meshes
+     * whatever the overlap (a quarter of a 1280-triangle icosphere pair's time): locals, not c's
+     * fields (which the stores might alias), and max instructions rather than branches keep them
+     * to a few instructions a vertex. Two vertices a round into two sets of extremes halve the
+     * chain of dependent max instructions that bounded them; max and min are exact, so the
+     * extremes do not depend on the order.
+     */
     pd_real e1 = -PD_REAL_MAX, e2 = PD_REAL_MAX, scale = PD_R(0);
     pd_v3 da = v3_scale(d, in->sa);
     {
         PD_GLOBAL const pd_real *va = in->va, *vb = in->vb;
         PD_GLOBAL pd_real *pa = c->proj_a, *pb = c->proj_b;
         int nva = in->nva, nvb = in->nvb;
-        for (int i = 0; i < nva; i++) {
+        pd_real e1o = e1, e2o = e2, so = scale;
+        int i = 0;
+        for (; i + 1 < nva; i += 2) {
             pd_real p = v3_dot(v3_load(va, i), da); /* = (sa v) . d, for the padded filter */
+            pd_real q = v3_dot(v3_load(va, i + 1), da);
+            pa[i] = p;
+            pa[i + 1] = q;
+            e1 = pd_max(e1, p);
+            e1o = pd_max(e1o, q);
+            scale = pd_max(scale, PD_FABS(p));
+            so = pd_max(so, PD_FABS(q));
+        }
+        if (i < nva) {
+            pd_real p = v3_dot(v3_load(va, i), da);
             pa[i] = p;
             e1 = pd_max(e1, p);
             scale = pd_max(scale, PD_FABS(p));
         }
-        for (int j = 0; j < nvb; j++) {
+        int j = 0;
+        for (; j + 1 < nvb; j += 2) {
+            pd_real p = v3_dot(v3_load(vb, j), db) + trd;
+            pd_real q = v3_dot(v3_load(vb, j + 1), db) + trd;
+            pb[j] = p;
+            pb[j + 1] = q;
+            e2 = pd_min(e2, p);
+            e2o = pd_min(e2o, q);
+            scale = pd_max(scale, PD_FABS(p));
+            so = pd_max(so, PD_FABS(q));
+        }
+        if (j < nvb) {
             pd_real p = v3_dot(v3_load(vb, j), db) + trd;
             pb[j] = p;
             e2 = pd_min(e2, p);
             scale = pd_max(scale, PD_FABS(p));
         }
+        e1 = pd_max(e1, e1o);
+        e2 = pd_min(e2, e2o);
+        scale = pd_max(scale, so);
     }
     /*
      * The half-planes are widened by OVL_CULL resolutions (OVL_SNAP L, L the largest coordinate
@@ -1129,9 +1187,14 @@ refilter:
     /* A triangle is kept from its first corner that reaches into the other's half-plane, so
      * each is listed once; the lists are sorted so that the cusps are summed in the same order
      * as without the filter (identical results). */
+    /* The corners reaching into the other's half-plane are listed first, without a branch
+     * (in queue, free until ovl_resolve): which of an icosphere's corners do is scattered over
+     * its vertex order, and a branch per corner mispredicted at each of them. */
+    PD_GLOBAL int *cand = c->queue;
     if (c->filter && in->vt_a_off && !open_b) {
-        for (int i = 0; i < in->nva; i++) {
-            if (!(c->proj_a[i] >= c->e2)) continue;
+        int nc = ovl_beyond(c->proj_a, in->nva, c->e2, 1, cand);
+        for (int h = 0; h < nc; h++) {
+            int i = cand[h];
             for (int k = in->vt_a_off[i]; k < in->vt_a_off[i + 1]; k++) {
                 int t = in->vt_a[k];
                 PD_GLOBAL const int *v = in->ta + 3 * t;
@@ -1151,8 +1214,9 @@ refilter:
         }
     }
     if (c->filter && in->vt_b_off) {
-        for (int j = 0; j < in->nvb; j++) {
-            if (!(c->proj_b[j] <= c->e1)) continue;
+        int nc = ovl_beyond(c->proj_b, in->nvb, c->e1, -1, cand);
+        for (int h = 0; h < nc; h++) {
+            int j = cand[h];
             for (int k = in->vt_b_off[j]; k < in->vt_b_off[j + 1]; k++) {
                 int u = in->vt_b[k];
                 PD_GLOBAL const int *v = in->tb + 3 * u;
