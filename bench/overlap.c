@@ -137,6 +137,10 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
         in[i].vt_a = s0->vt_a;
         in[i].vt_b_off = s0->vt_b_off;
         in[i].vt_b = s0->vt_b;
+        in[i].vc_a = s0->vc_a;
+        in[i].disc_a = s0->disc_a;
+        in[i].vc_b = s0->vc_b;
+        in[i].disc_b = s0->disc_b;
     }
     long reps = 0;
     double t0 = now(), t, sink = 0, kept_sum = 0;
@@ -237,7 +241,11 @@ int main(int argc, char **argv)
     struct {
         const char *name;
         int tris;
-    } shapes[] = {{"schonhardt", 0}, {"icosphere", 80}, {"icosphere", 320}, {"icosphere", 1280}};
+    } shapes[] = {{"schonhardt", 0},
+                  {"icosphere", 80},
+                  {"icosphere", 320},
+                  {"icosphere", 1280},
+                  {"icosphere", 5120}}; /* 5120: large enough for the filter's clusters */
     pd_device *dev = NULL;
     pd_error err = {0};
     if (use_cl && pd_device_open(-1, &dev, &err) != PD_OK) {

@@ -358,18 +358,26 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     size_t ilen, rlen;
     ovl_scratch_len(s, &ilen, &rlen);
     size_t n_va = 3 * (size_t)s->nva, n_vb = 3 * (size_t)s->nvb, n_xf = 18 * (size_t)npairs;
+    size_t n_ba = ovl_discs_len(s->nva), n_bb = ovl_discs_len(s->nvb);
     void *hva = malloc(rs * n_va), *hvb = malloc(rs * n_vb), *hxf = malloc(rs * n_xf);
+    void *hba = malloc(rs * n_ba), *hbb = malloc(rs * n_bb);
     void *hout = malloc(rs * OVL_RESULT_LEN * (size_t)npairs);
-    cl_mem b[12] = {0};
+    cl_mem b[16] = {0};
     cl_int e = CL_SUCCESS;
     rc = PD_OK;
-    if (!hva || !hvb || !hxf || !hout) {
+    if (!s->vc_a || !s->vc_b) {
+        rc = pd_error_set(err, PD_EINVAL, "opencl overlap: the setup has no vertex clusters");
+        goto done;
+    }
+    if (!hva || !hvb || !hxf || !hout || !hba || !hbb) {
         rc = pd_error_set(err, PD_ENOMEM, "opencl overlap: out of memory");
         goto done;
     }
     to_real(hva, s->va, n_va, dbl);
     to_real(hvb, s->vb, n_vb, dbl);
     to_real(hxf, xf, n_xf, dbl);
+    to_real(hba, s->disc_a, n_ba, dbl);
+    to_real(hbb, s->disc_b, n_bb, dbl);
     const cl_mem_flags ro = CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR;
     b[0] = clCreateBuffer(dev->ctx, ro, rs * n_va, hva, &e);
     if (e == CL_SUCCESS)
@@ -385,6 +393,12 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
         b[10] = clCreateBuffer(dev->ctx, ro, sizeof(int) * (s->nvb + 1), s->vt_b_off, &e);
     if (e == CL_SUCCESS)
         b[11] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * s->ntb, s->vt_b, &e);
+    if (e == CL_SUCCESS)
+        b[12] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 2 * s->nva, s->vc_a, &e);
+    if (e == CL_SUCCESS) b[13] = clCreateBuffer(dev->ctx, ro, rs * n_ba, hba, &e);
+    if (e == CL_SUCCESS)
+        b[14] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 2 * s->nvb, s->vc_b, &e);
+    if (e == CL_SUCCESS) b[15] = clCreateBuffer(dev->ctx, ro, rs * n_bb, hbb, &e);
     if (e == CL_SUCCESS)
         b[5] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);
     if (e == CL_SUCCESS)
@@ -406,7 +420,7 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[3]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->nvb);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &s->ntb);
-    for (int i = 8; i < 12; i++)
+    for (int i = 8; i < 16; i++)
         args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[i]);
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[4]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &npairs);
@@ -434,10 +448,12 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     for (size_t i = 0; i < OVL_RESULT_LEN * (size_t)npairs; i++)
         out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
 done:
-    for (int i = 0; i < 12; i++)
+    for (int i = 0; i < 16; i++)
         if (b[i]) clReleaseMemObject(b[i]);
     free(hva);
     free(hvb);
+    free(hba);
+    free(hbb);
     free(hxf);
     free(hout);
     return rc;

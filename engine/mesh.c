@@ -609,7 +609,7 @@ void pd_mesh_destroy(pd_mesh *m)
 
 /* Cyclic Jacobi iteration on a symmetric 3x3: w gets the eigenvalues, column k of v the unit
  * eigenvector of w[k]. Converges quadratically; 50 sweeps is far more than ever needed. */
-static void jacobi3(const double in[3][3], double w[3], double v[3][3])
+void mesh_sym3_eigen(const double in[3][3], double w[3], double v[3][3])
 {
     double a[3][3];
     memcpy(a, in, sizeof a);
@@ -678,7 +678,7 @@ static void canonical_sign(double *a)
 static void principal_axes(const double inertia[3][3], double pr[3], double axes[3][3])
 {
     double w[3], v[3][3];
-    jacobi3(inertia, w, v);
+    mesh_sym3_eigen(inertia, w, v);
     int ord[3] = {0, 1, 2};
     for (int i = 0; i < 3; i++)
         for (int j = i + 1; j < 3; j++)

@@ -46,4 +46,7 @@ double mesh_signed_volume(const double *verts, int nverts, const int *tris, int 
  */
 int mesh_convex_hull(const double *pts, int n, int **tris_out, int *ntris_out);
 
+/* Eigenvalues w and unit eigenvectors (columns of v) of the symmetric 3x3 in (Jacobi). */
+void mesh_sym3_eigen(const double in[3][3], double w[3], double v[3][3]);
+
 #endif

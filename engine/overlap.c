@@ -75,6 +75,12 @@ int ovl_setup_make(const pd_mesh *a, const pd_pose *pa, const pd_mesh *b, const 
     for (int i = 0; i < a->nverts; i++)
         for (int k = 0; k < 3; k++)
             s->va[3 * i + k] = a->verts[3 * i + k] - ma.centroid[k];
+    /* the filter's clusters, in the frames the kernel reads the vertices in */
+    if (ovl_vertex_clusters(s->va, a->nverts, &s->vc_a, &s->disc_a) != PD_OK ||
+        ovl_vertex_clusters(b->verts, b->nverts, &s->vc_b, &s->disc_b) != PD_OK) {
+        ovl_setup_free(s);
+        return pd_error_set(err, PD_ENOMEM, "overlap: out of memory");
+    }
     s->ta = a->tris;
     s->nva = a->nverts;
     s->nta = a->ntris;
@@ -112,8 +118,14 @@ void ovl_setup_free(ovl_setup *s)
     free(s->vt_a);
     free(s->vt_b_off);
     free(s->vt_b);
+    free(s->vc_a);
+    free(s->vc_b);
+    free(s->disc_a);
+    free(s->disc_b);
     s->va = NULL;
     s->vt_a_off = s->vt_a = s->vt_b_off = s->vt_b = NULL;
+    s->vc_a = s->vc_b = NULL;
+    s->disc_a = s->disc_b = NULL;
 }
 
 void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *out)

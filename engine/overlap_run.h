@@ -17,6 +17,8 @@ typedef struct ovl_setup {
     const int *tb;
     int nvb, ntb;
     int *vt_a_off, *vt_a, *vt_b_off, *vt_b; /* vertex -> triangle tables (owned) */
+    int *vc_a, *vc_b;                       /* vertex clusters of va and vb (owned) */
+    double *disc_a, *disc_b;                /* and their discs */
     double rot[9], tr[3];                   /* B's frame -> A's frame */
     double ca[3], cb[3];                    /* centroids in A's frame */
     int flags;
@@ -58,6 +60,15 @@ void ovl_setup_free(ovl_setup *s);
 /* Vertex -> triangle table of m in CSR form (see ovl_in in kernels/overlap.h): the triangles of
  * vertex i are (*vt)[(*off)[i] .. (*off)[i+1]-1]. Returns PD_OK or PD_ENOMEM; free both. */
 int ovl_vertex_triangles(const pd_mesh *m, int **off, int **vt);
+
+/*
+ * Vertex clusters of the nv vertices v (xyz) for the filter (ovl_in's vc_* and disc_*, kernels/
+ * overlap_predicates.h): *vc receives 2 nv ints, *disc OVL_DISC reals per cluster
+ * (ovl_nclusters). Returns PD_OK or PD_ENOMEM; free both.
+ */
+int ovl_vertex_clusters(const double *v, int nv, int **vc, double **disc);
+/* Reals in the discs of nv vertices' clusters. */
+size_t ovl_discs_len(int nv);
 
 /* Converts a result in A's frame into a world-frame pd_contact. */
 void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *out);
@@ -102,6 +113,16 @@ static inline void ovl_in_from_setup(ovl_in *in, const ovl_setup *s, const pd_re
                                      const pd_real *vb, int flags, int *iscr, pd_real *rscr,
                                      int pts_cap)
 {
+    /* the clusters, whose discs must be the kernel's reals: in single precision the caller
+     * sets them from its own copies of the discs (overlap_precision.inc), or goes without */
+    in->vc_a = in->vc_b = NULL;
+    in->disc_a = in->disc_b = NULL;
+#if PD_DOUBLE
+    in->vc_a = s->vc_a;
+    in->vc_b = s->vc_b;
+    in->disc_a = s->disc_a;
+    in->disc_b = s->disc_b;
+#endif
     in->va = va;
     in->sa = 1;
     in->ta = s->ta;

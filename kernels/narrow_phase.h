@@ -65,6 +65,9 @@ PD_FN void np_setup(const np_shapes *sh, const np_body *a, const np_body *b, int
     in->ntb = sh->toff[sb + 1] - sh->toff[sb];
     in->vt_b_off = sh->vt_off + sh->voff[sb] + sb;
     in->vt_b = sh->vt + 3 * sh->toff[sb];
+    /* no vertex clusters in the engine's shape tables yet: the filter projects every vertex */
+    in->vc_a = in->vc_b = 0;
+    in->disc_a = in->disc_b = 0;
     in->sa = a->size;
     const pd_real *qa = a->q, *qb = b->q;
     pd_real qr[4];
@@ -143,6 +146,8 @@ PD_FN int np_wall_local(const wb_tree *w, pd_real reach, int cap, PD_GLOBAL int 
     in->nvb = nv;
     in->ntb = nt;
     in->vt_b_off = in->vt_b = 0;
+    in->vc_b = 0; /* nor clusters for the wall's local part */
+    in->disc_b = 0;
     in->flags |= OVL_OPEN_B;
     return nt;
 }

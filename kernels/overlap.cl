@@ -11,6 +11,8 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
                             __global const pd_real *vb, __global const int *tb, int nvb, int ntb,
                             __global const int *vt_a_off, __global const int *vt_a,
                             __global const int *vt_b_off, __global const int *vt_b,
+                            __global const int *vc_a, __global const pd_real *disc_a,
+                            __global const int *vc_b, __global const pd_real *disc_b,
                             __global const pd_real *xf, int npairs, int flags, __global int *iscr,
                             __global pd_real *rscr, int pts_cap, __global pd_real *out)
 {
@@ -29,6 +31,10 @@ __kernel void overlap_pairs(__global const pd_real *va, __global const int *ta, 
     in.vt_a = vt_a;
     in.vt_b_off = vt_b_off;
     in.vt_b = vt_b;
+    in.vc_a = vc_a;
+    in.disc_a = disc_a;
+    in.vc_b = vc_b;
+    in.disc_b = disc_b;
     in.nvb = nvb;
     in.ntb = ntb;
     for (int i = 0; i < 9; i++)

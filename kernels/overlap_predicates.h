@@ -95,6 +95,17 @@ typedef struct ovl_in {
      * vt[vt_off[i] .. vt_off[i+1]-1]); with them the filter visits only the triangles of the
      * vertices that reach into the other's half-plane; NULL: it classifies every triangle */
     PD_GLOBAL const int *vt_a_off, *vt_a, *vt_b_off, *vt_b;
+    /*
+     * optional vertex clusters (ovl_vertex_clusters in engine/overlap.c), with which the filter
+     * projects only the vertices of the clusters that can reach an extreme or the other's
+     * half-plane instead of every vertex: vc (2 nv ints) lists the vertices cluster by cluster
+     * (OVL_CLUSTER a cluster, the last one shorter) and then each vertex's cluster; disc
+     * (OVL_DISC reals a cluster) holds the disc that bounds it (ovl_cluster_bounds): centre m,
+     * unit normal n, radius r in its plane, half-thickness h, and a bound on |v| and |m|, in the
+     * frame of va (A) or vb (B). NULL: every vertex is projected. Used only with the vt tables.
+     */
+    PD_GLOBAL const int *vc_a, *vc_b;
+    PD_GLOBAL const pd_real *disc_a, *disc_b;
     pd_real rot[9]; /* B's frame -> A's frame, row-major: p = rot * v + tr (B's scale in rot) */
     pd_real tr[3];
     pd_v3 ca, cb; /* centroids of A and B in A's frame (filter direction, eq. 5.3) */
@@ -128,15 +139,34 @@ typedef struct ovl_out {
     pd_real area;
 } ovl_out;
 
+/*
+ * Vertices a cluster (ovl_in's vc_*, disc_*) and reals a cluster's disc. OVL_CLUSTER_MIN: the
+ * vertices of both meshes together from which the filter uses the clusters. Below it, projecting
+ * every vertex costs less than bounding the clusters and projecting those that reach an extreme
+ * or the other's half-plane, about a third of a 1280-triangle icosphere's: with the clusters its
+ * pair took 2 % longer and an 80-triangle pair 8 %, a 5120-triangle pair 10-13 % less
+ * (bench/RESULTS.md, 2026-12-06).
+ */
+#define OVL_CLUSTER 16
+#define OVL_DISC 9
+#define OVL_CLUSTER_MIN 2048
+PD_FN int ovl_nclusters(int nv)
+{
+    return (nv + OVL_CLUSTER - 1) / OVL_CLUSTER;
+}
+
 PD_FN int ovl_iscratch_len(int nta, int ntb, int nva, int nvb)
 {
     /* kept, near, xa / xb, slot, strip ord: 5 per triangle; st, and ovl_resolve's list and
-     * queue (one side at a time): 3 per vertex; hits and sweep_ord: 2 per triangle of B */
-    return 5 * (nta + ntb) + 3 * (nva + nvb) + 2 * ntb;
+     * queue (one side at a time): 3 per vertex; hits and sweep_ord: 2 per triangle of B; the
+     * clusters' projected flags: 1 per cluster */
+    return 5 * (nta + ntb) + 3 * (nva + nvb) + 2 * ntb + ovl_nclusters(nva) + ovl_nclusters(nvb);
 }
 PD_FN int ovl_rscratch_len(int nta, int ntb, int nva, int nvb, int pts_cap)
 {
-    return nva + nvb + 3 * nva + 3 * nvb + 3 * pts_cap + OVL_TRI_CACHE * ntb + nta + 2 * ntb;
+    /* ... and the clusters' bounds of projection: 2 per cluster */
+    return nva + nvb + 3 * nva + 3 * nvb + 3 * pts_cap + OVL_TRI_CACHE * ntb + nta + 2 * ntb +
+           2 * (ovl_nclusters(nva) + ovl_nclusters(nvb));
 }
 /* The per-node arrays of OVL_PLACES (ovl_ctx, ovl_ndi, ovl_ndr): ints and reals. */
 enum { OVL_ND_KEY, OVL_ND_END, OVL_ND_FL, OVL_ND_PAR, OVL_ND_ORD, OVL_ND_INTS };
@@ -211,6 +241,14 @@ typedef struct ovl_ctx {
     pd_v3 nblo, nbhi;         /* box of B's near triangles (the pair loop's), padded */
     int origin_in_b;          /* OVL_OPEN_B: A's centroid inside the wall; -1 not yet known */
     PD_GLOBAL pd_real *proj_a, *proj_b, *vat, *vbt, *pts, *ucache;
+    /*
+     * clustered: the filter projected only the vertices of the clusters flagged in done_a /
+     * done_b (ovl_in's vc_*); any other vertex is known to lie short of the other's half-plane
+     * (ovl_proj). bnd_a / bnd_b: each cluster's lowest and highest possible projection.
+     */
+    int clustered;
+    PD_GLOBAL int *done_a, *done_b;
+    PD_GLOBAL pd_real *bnd_a, *bnd_b;
     ovl_strip strip_a, strip_b; /* for casts from B's vertices through A, and from A's through B */
     /*
      * The pair loop's sweep, when B has OVL_STRIP_MIN near triangles or more: their boxes in
@@ -782,14 +820,29 @@ PD_FN int ovl_open_inside_b(ovl_ctx *c, pd_v3 p)
     return odd;
 }
 
+/*
+ * Vertex v's projection on the filter's direction (side 0: A's, 1: B's). Where the filter left
+ * its cluster unprojected, the cluster lies wholly short of the other's half-plane (ovl_in's
+ * vc_*), and the value stands for that: the lowest real for A, the highest for B.
+ */
+PD_FN pd_real ovl_proj(const ovl_ctx *c, int side, int v)
+{
+    if (side) {
+        if (c->clustered && !c->done_b[c->in->vc_b[c->in->nvb + v]]) return PD_REAL_MAX;
+        return c->proj_b[v];
+    }
+    if (c->clustered && !c->done_a[c->in->vc_a[c->in->nva + v]]) return -PD_REAL_MAX;
+    return c->proj_a[v];
+}
+
 /* Whether vertex v of side (0: A, 1: B) is outside the other solid by the filter alone: beyond
  * the other's half-plane or outside the box where A n B lies (both widened by OVL_CULL pads). */
 PD_FN int ovl_outside_known(const ovl_ctx *c, int side, int v)
 {
     if (!c->filter) return 0;
-    if (side) return c->proj_b[v] > c->e1 || !ovl_in_box(c, ovl_vb(c, v));
+    if (side) return ovl_proj(c, 1, v) > c->e1 || !ovl_in_box(c, ovl_vb(c, v));
     if (c->in->flags & OVL_OPEN_B) return 0; /* A is not filtered against a wall */
-    return c->proj_a[v] < c->e2 || !ovl_in_box(c, ovl_va(c, v));
+    return ovl_proj(c, 0, v) < c->e2 || !ovl_in_box(c, ovl_va(c, v));
 }
 
 /* Point-in-B test for A's vertex i, one that ovl_outside_known did not place. */
