@@ -530,19 +530,22 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     ovl_scratch_len(&big, &ilen, &rlen);
     size_t rs = dbl ? sizeof(double) : sizeof(float);
     /* real-valued inputs converted to the device's scalar */
-    const double *src[4] = {x, q, size, t->vert};
-    size_t len[4] = {3 * (size_t)nbody, 4 * (size_t)nbody, (size_t)nbody, 3 * (size_t)nv};
-    void *host[4] = {0};
-    cl_mem b[13] = {0};
+    /* the clusters' tables where t has them (np_cluster_tables), else NULL arguments */
+    int ncl = t->vc ? t->coff[t->nshape] : 0;
+    const double *src[5] = {x, q, size, t->vert, t->disc};
+    size_t len[5] = {3 * (size_t)nbody, 4 * (size_t)nbody, (size_t)nbody, 3 * (size_t)nv,
+                     NP_DISC_LEN * (size_t)ncl};
+    void *host[5] = {0};
+    cl_mem b[16] = {0};
     cl_kernel k = NULL;
     cl_int e = CL_SUCCESS;
     void *hout = malloc(rs * OVL_RESULT_LEN * (size_t)npairs);
     rc = PD_OK;
-    for (int i = 0; i < 4; i++) {
+    for (int i = 0; i < 5; i++) {
         host[i] = malloc(rs * (len[i] ? len[i] : 1));
         if (!host[i])
             rc = PD_ENOMEM;
-        else
+        else if (len[i])
             to_real(host[i], src[i], len[i], dbl);
     }
     if (rc != PD_OK || !hout) {
@@ -566,10 +569,22 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
         b[9] = clCreateBuffer(dev->ctx, ro, sizeof(int) * (nv + t->nshape), (void *)t->vt_off, &e);
     if (e == CL_SUCCESS)
         b[10] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 3 * nt, (void *)t->vt, &e);
+    if (e == CL_SUCCESS && t->vc) {
+        /* every shape's vc span, clustered or not, lies below the last clustered one's end */
+        size_t nvc = 0;
+        for (int s = 0; s < t->nshape; s++)
+            if (t->coff[s + 1] > t->coff[s]) nvc = 2 * (size_t)t->voff[s + 1];
+        b[11] = clCreateBuffer(dev->ctx, ro, sizeof(int) * (nvc ? nvc : 1), (void *)t->vc, &e);
+        if (e == CL_SUCCESS)
+            b[12] =
+                clCreateBuffer(dev->ctx, ro, sizeof(int) * (t->nshape + 1), (void *)t->coff, &e);
+        if (e == CL_SUCCESS)
+            b[13] = clCreateBuffer(dev->ctx, ro, rs * (len[4] ? len[4] : 1), host[4], &e);
+    }
     if (e == CL_SUCCESS)
-        b[11] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);
+        b[14] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);
     if (e == CL_SUCCESS)
-        b[12] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, rs * rlen * npairs, NULL, &e);
+        b[15] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, rs * rlen * npairs, NULL, &e);
     cl_mem bout = NULL;
     if (e == CL_SUCCESS)
         bout = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * OVL_RESULT_LEN * npairs, NULL, &e);
@@ -583,11 +598,11 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     cl_int ae = CL_SUCCESS;
     ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[0]);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &npairs);
-    for (int i = 1; i <= 10; i++)
+    for (int i = 1; i <= 13; i++) /* b[11..13], the clusters, may be NULL buffers */
         ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[i]);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &flags);
-    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[11]);
-    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[12]);
+    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[14]);
+    ae |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[15]);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &il);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &rl);
     ae |= clSetKernelArg(k, ai++, sizeof(int), &cap);
@@ -606,9 +621,9 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     for (size_t i = 0; i < OVL_RESULT_LEN * (size_t)npairs; i++)
         out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
 done:
-    for (int i = 0; i < 13; i++)
+    for (int i = 0; i < 16; i++)
         if (b[i]) clReleaseMemObject(b[i]);
-    for (int i = 0; i < 4; i++)
+    for (int i = 0; i < 5; i++)
         free(host[i]);
     free(hout);
     if (k) clReleaseKernel(k);

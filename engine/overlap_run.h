@@ -37,6 +37,8 @@ typedef struct ovl_result {
 
 /* Reals in a kernel's result record (OVL_OUT_LEN in kernels/overlap_predicates.h). */
 #define OVL_RESULT_LEN 18
+/* Reals in a cluster's disc (OVL_DISC, ibid.). */
+#define NP_DISC_LEN 9
 
 /* Runs the host build of the kernel. Returns PD_OK or PD_ENOMEM. */
 int ovl_run_f64(const ovl_setup *s, ovl_result *r);
@@ -70,6 +72,16 @@ int ovl_vertex_clusters(const double *v, int nv, int **vc, double **disc);
 /* Reals in the discs of nv vertices' clusters. */
 size_t ovl_discs_len(int nv);
 
+/*
+ * The clusters of the first nclust of nshape concatenated shapes (vertices vert[3 voff[s] ..],
+ * as kernels/narrow_phase.h stores them), as np_shapes reads them: shape s's vc at
+ * (*vc)[2 voff[s] ..], its discs at (*disc)[OVL_DISC (*coff)[s] ..]; the later shapes (walls,
+ * met through their BVH) get none, coff[s + 1] == coff[s]. *coff has nshape + 1 entries. Returns
+ * PD_OK or PD_ENOMEM; free all three.
+ */
+int np_cluster_tables(const double *vert, const int *voff, int nshape, int nclust, int **vc,
+                      int **coff, double **disc);
+
 /* Converts a result in A's frame into a world-frame pd_contact. */
 void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *out);
 
@@ -85,12 +97,15 @@ void ovl_setup_pack(const ovl_setup *s, double xf[18]);
 
 /*
  * Shapes for the narrow phase (kernels/narrow_phase.h), in doubles: nshape shapes concatenated,
- * vertex and triangle offsets voff/toff (nshape + 1), vertex -> triangle tables vt_off/vt.
+ * vertex and triangle offsets voff/toff (nshape + 1), vertex -> triangle tables vt_off/vt, and
+ * optionally the filter's vertex clusters (np_cluster_tables; vc NULL: none).
  */
 typedef struct np_tables {
     int nshape;
     const double *vert;
     const int *tri, *voff, *toff, *vt_off, *vt;
+    const int *vc, *coff;
+    const double *disc;
 } np_tables;
 
 /*

@@ -76,6 +76,7 @@ typedef struct sim {
     cl_mem L, f, t;
     /* shapes and materials */
     cl_mem vert, tri, voff, toff, vt_off, vt, kind, radius_ratio, params;
+    cl_mem vc, coff, disc;        /* the particle shapes' vertex clusters (np_cluster_tables) */
     cl_mem unit_inertia, density; /* per shape: principal moments for size 1 and density 1;
                                      per material: kg/m^3 */
     /* walls' triangle BVHs (kernels/wall_bvh.h, engine/wall_tree.c) */

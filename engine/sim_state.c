@@ -315,7 +315,8 @@ static int upload_shapes(sim *m, pd_error *err)
     double *rr = calloc((size_t)ns, sizeof(double));
     double *ui = calloc(3 * (size_t)ns, sizeof(double)); /* walls' stay 0: never integrated */
     double *vert = NULL;
-    int *tri = NULL, *vt_off = NULL, *vt = NULL, rc = PD_OK;
+    int *tri = NULL, *vt_off = NULL, *vt = NULL, *vc = NULL, *coff = NULL, rc = PD_OK;
+    double *disc = NULL;
     if (!mesh || !voff || !toff || !kind || !rr || !ui) goto oom;
     int max_ta = 0, max_va = 0, max_tb = 0, max_vb = 0;
     for (int i = 0; i < ns; i++) {
@@ -389,6 +390,8 @@ static int upload_shapes(sim *m, pd_error *err)
     }
     m->nshape = ns;
     if ((rc = upload_wall_trees(m, vert, tri, voff, toff, err)) != PD_OK) goto done;
+    /* the filter's vertex clusters, for the particles' shapes (walls are met through their BVH) */
+    if (np_cluster_tables(vert, voff, ns, s->nshape, &vc, &coff, &disc) != PD_OK) goto oom;
     /* overlap scratch: particle pairs, or a particle and a wall's part near it (wall_cap) */
     int cap = m->wall_cap, cap_v = 3 * cap;
     m->pts_cap = ovl_pts_cap(max_ta, max_tb > cap ? max_tb : cap);
@@ -412,6 +415,10 @@ static int upload_shapes(sim *m, pd_error *err)
     m->toff = mk(m, sizeof(int) * ((size_t)ns + 1), &ok, &e);
     m->vt_off = mk(m, sizeof(int) * ((size_t)voff[ns] + ns), &ok, &e);
     m->vt = mk(m, sizeof(int) * 3 * (size_t)toff[ns], &ok, &e);
+    size_t nvc = 2 * (size_t)voff[s->nshape] + 1, ndisc = NP_DISC_LEN * (size_t)coff[ns] + 1;
+    m->vc = mk(m, sizeof(int) * nvc, &ok, &e);
+    m->coff = mk(m, sizeof(int) * ((size_t)ns + 1), &ok, &e);
+    m->disc = mk(m, m->rs * ndisc, &ok, &e);
     m->kind = mk(m, sizeof(int) * (size_t)ns, &ok, &e);
     m->radius_ratio = mk(m, m->rs * (size_t)ns, &ok, &e);
     m->unit_inertia = mk(m, m->rs * 3 * (size_t)ns, &ok, &e);
@@ -425,6 +432,9 @@ static int upload_shapes(sim *m, pd_error *err)
     if (rc == PD_OK) rc = write_ints(m, m->toff, (size_t)ns + 1, toff, err);
     if (rc == PD_OK) rc = write_ints(m, m->vt_off, (size_t)voff[ns] + ns, vt_off, err);
     if (rc == PD_OK) rc = write_ints(m, m->vt, 3 * (size_t)toff[ns], vt, err);
+    if (rc == PD_OK) rc = write_ints(m, m->vc, nvc, vc, err);
+    if (rc == PD_OK) rc = write_ints(m, m->coff, (size_t)ns + 1, coff, err);
+    if (rc == PD_OK) rc = sim_write(m, m->disc, 0, ndisc, disc, err);
     if (rc == PD_OK) rc = write_ints(m, m->kind, (size_t)ns, kind, err);
     if (rc == PD_OK) rc = sim_write(m, m->radius_ratio, 0, (size_t)ns, rr, err);
     if (rc == PD_OK) rc = sim_write(m, m->unit_inertia, 0, 3 * (size_t)ns, ui, err);
@@ -442,6 +452,9 @@ done:
     free(tri);
     free(vt_off);
     free(vt);
+    free(vc);
+    free(coff);
+    free(disc);
     return rc;
 }
 
@@ -815,6 +828,9 @@ void sim_destroy(sim *m)
                       &m->toff,
                       &m->vt_off,
                       &m->vt,
+                      &m->vc,
+                      &m->coff,
+                      &m->disc,
                       &m->kind,
                       &m->radius_ratio,
                       &m->params,

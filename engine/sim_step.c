@@ -348,28 +348,16 @@ static int contacts(sim *m, pd_error *err)
     e |= CL_ARG(k, a++, m->carry.kt);
     e |= CL_ARG(k, a++, m->carry.point);
     e |= CL_ARG(k, a++, m->carry.twist);
-    cl_mem body[] = {m->x,
-                     m->q,
-                     m->v,
-                     m->L,
-                     m->w,
-                     m->size,
-                     m->inv_m,
-                     m->shape,
-                     m->material,
-                     m->unit_inertia,
-                     m->density,
-                     m->vert,
-                     m->tri,
-                     m->voff,
-                     m->toff,
-                     m->vt_off,
-                     m->vt,
-                     m->kind,
-                     m->radius_ratio,
-                     m->params};
-    for (size_t i = 0; i < sizeof body / sizeof body[0]; i++)
-        e |= CL_ARG(k, a++, body[i]);
+    cl_mem bodies[] = {m->x,      m->q,     m->v,     m->L,        m->w,
+                       m->size,   m->inv_m, m->shape, m->material, m->unit_inertia,
+                       m->density};
+    for (size_t i = 0; i < sizeof bodies / sizeof bodies[0]; i++)
+        e |= CL_ARG(k, a++, bodies[i]);
+    /* the shapes (vc, coff, disc: the filter's vertex clusters) and the materials' parameters */
+    cl_mem shapes[] = {m->vert, m->tri,  m->voff, m->toff, m->vt_off,       m->vt,
+                       m->vc,   m->coff, m->disc, m->kind, m->radius_ratio, m->params};
+    for (size_t i = 0; i < sizeof shapes / sizeof shapes[0]; i++)
+        e |= CL_ARG(k, a++, shapes[i]);
     e |= CL_ARG(k, a++, m->nmat);
     e |= CL_ARG(k, a++, m->n);
     e |= arg_real(m, k, a++, m->dt);

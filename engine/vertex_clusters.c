@@ -7,11 +7,14 @@
  */
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #define PD_DOUBLE 1 /* the kernels' cluster sizes (overlap_predicates.h); the discs are doubles */
 #include "mesh_internal.h"
 #include "overlap_predicates.h"
 #include "overlap_run.h"
+
+_Static_assert(NP_DISC_LEN == OVL_DISC, "overlap_run.h's NP_DISC_LEN is the kernels' OVL_DISC");
 
 /*
  * The vertices' order: halves of halves, each cut at the median of its box's longest side, so that
@@ -138,6 +141,40 @@ int ovl_vertex_clusters(const double *v, int nv, int **vc_out, double **disc_out
         vc_disc(v, vc + c * OVL_CLUSTER, end - c * OVL_CLUSTER, disc + OVL_DISC * c);
     }
     *vc_out = vc;
+    *disc_out = disc;
+    return PD_OK;
+}
+
+int np_cluster_tables(const double *vert, const int *voff, int nshape, int nclust, int **vc_out,
+                      int **coff_out, double **disc_out)
+{
+    int *coff = calloc((size_t)nshape + 1, sizeof *coff);
+    if (!coff) return PD_ENOMEM;
+    for (int s = 0; s < nshape; s++)
+        coff[s + 1] = coff[s] + (s < nclust ? ovl_nclusters(voff[s + 1] - voff[s]) : 0);
+    /* one element at least: an empty table is still a buffer for the kernels */
+    int *vc = malloc(sizeof *vc * (2 * (size_t)voff[nclust] + 1));
+    double *disc = malloc(sizeof *disc * (OVL_DISC * (size_t)coff[nshape] + 1));
+    int rc = vc && disc ? PD_OK : PD_ENOMEM;
+    for (int s = 0; s < nclust && rc == PD_OK; s++) {
+        int nv = voff[s + 1] - voff[s], *svc;
+        double *sdisc;
+        if (nv == 0) continue; /* an analytic sphere */
+        rc = ovl_vertex_clusters(vert + 3 * (size_t)voff[s], nv, &svc, &sdisc);
+        if (rc != PD_OK) break;
+        memcpy(vc + 2 * (size_t)voff[s], svc, sizeof *vc * 2 * (size_t)nv);
+        memcpy(disc + OVL_DISC * (size_t)coff[s], sdisc, sizeof *disc * ovl_discs_len(nv));
+        free(svc);
+        free(sdisc);
+    }
+    if (rc != PD_OK) {
+        free(coff);
+        free(vc);
+        free(disc);
+        return rc;
+    }
+    *vc_out = vc;
+    *coff_out = coff;
     *disc_out = disc;
     return PD_OK;
 }

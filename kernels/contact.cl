@@ -46,7 +46,8 @@ __kernel void contact_forces(
     __global const int *material, __global const pd_real *unit_inertia,
     __global const pd_real *density, __global const pd_real *vert, __global const int *tri,
     __global const int *voff, __global const int *toff, __global const int *vt_off,
-    __global const int *vt, __global const int *kind, __global const pd_real *radius_ratio,
+    __global const int *vt, __global const int *vc, __global const int *coff,
+    __global const pd_real *disc, __global const int *kind, __global const pd_real *radius_ratio,
     __global const pd_real *params, int nmat, int nparticles, pd_real dt,
     __global const pd_real *wnode_box, __global const int *wnode_kid, __global const int *wnode_off,
     __global const int *wtri_order, int wall_cap, int nwall, __global int *status,
@@ -75,6 +76,9 @@ __kernel void contact_forces(
     wd.sh.toff = toff;
     wd.sh.vt_off = vt_off;
     wd.sh.vt = vt;
+    wd.sh.vc = vc;
+    wd.sh.coff = coff;
+    wd.sh.disc = disc;
     wd.kind = kind;
     wd.radius_ratio = radius_ratio;
     wd.params = params;

@@ -1,9 +1,9 @@
 /*
  * narrow.cl - the narrow phase over candidate pairs (kernels/narrow_phase.h), one work-item per
  * pair. Built with -DPD_DOUBLE=0 or 1. Particles: x (3n), q (4n, [w, x, y, z]), size (n),
- * shape (n); shapes as in narrow_phase.h. Each pair gets ilen ints and rlen reals of scratch and
- * writes OVL_OUT_LEN reals (ovl_out_store), in world coordinates (the normal from the pair's first
- * particle into its second).
+ * shape (n); shapes as in narrow_phase.h (vc, coff and disc NULL: no vertex clusters). Each pair
+ * gets ilen ints and rlen reals of scratch and writes OVL_OUT_LEN reals (ovl_out_store), in world
+ * coordinates (the normal from the pair's first particle into its second).
  */
 #include "pd_real.h"
 #include "narrow_phase.h"
@@ -13,7 +13,8 @@ __kernel void narrow_phase(__global const int *pairs, int npairs, __global const
                            __global const int *shape, __global const pd_real *vert,
                            __global const int *tri, __global const int *voff,
                            __global const int *toff, __global const int *vt_off,
-                           __global const int *vt, int flags, __global int *iscr,
+                           __global const int *vt, __global const int *vc, __global const int *coff,
+                           __global const pd_real *disc, int flags, __global int *iscr,
                            __global pd_real *rscr, int ilen, int rlen, int pts_cap,
                            __global pd_real *out)
 {
@@ -26,6 +27,9 @@ __kernel void narrow_phase(__global const int *pairs, int npairs, __global const
     sh.toff = toff;
     sh.vt_off = vt_off;
     sh.vt = vt;
+    sh.vc = vc;
+    sh.coff = coff;
+    sh.disc = disc;
     np_body b[2];
     for (int k = 0; k < 2; k++) {
         int i = pairs[2 * g + k];

@@ -6,7 +6,9 @@
  *
  * Shapes are concatenated: shape s has vertices vert[3 voff[s] ..], triangles tri[3 toff[s] ..]
  * with indices local to the shape, the vertex -> triangle table vt_off[voff[s] + s ..] (nv + 1
- * entries, local) over vt[3 toff[s] ..].
+ * entries, local) over vt[3 toff[s] ..]. The filter's vertex clusters (ovl_in's vc_*, disc_*),
+ * where vc is not NULL: shape s's at vc[2 voff[s] ..] and disc[OVL_DISC coff[s] ..], none where
+ * coff[s + 1] == coff[s] (walls, spheres).
  */
 #ifndef PD_NARROW_PHASE_H
 #define PD_NARROW_PHASE_H
@@ -16,7 +18,18 @@
 typedef struct np_shapes {
     PD_GLOBAL const pd_real *vert;
     PD_GLOBAL const int *tri, *voff, *toff, *vt_off, *vt;
+    PD_GLOBAL const int *vc, *coff; /* NULL vc: no clusters */
+    PD_GLOBAL const pd_real *disc;
 } np_shapes;
+
+/* Shape s's vertex clusters into *vc and *disc, or NULLs where it has none. */
+PD_FN void np_clusters(const np_shapes *sh, int s, PD_GLOBAL const int **vc,
+                       PD_GLOBAL const pd_real **disc)
+{
+    int has = sh->vc && sh->coff[s + 1] > sh->coff[s];
+    *vc = has ? sh->vc + 2 * sh->voff[s] : 0;
+    *disc = has ? sh->disc + OVL_DISC * sh->coff[s] : 0;
+}
 
 /* Pose of one particle: position (m), orientation [w, x, y, z] (unit), size (m), shape index. */
 typedef struct np_body {
@@ -65,9 +78,8 @@ PD_FN void np_setup(const np_shapes *sh, const np_body *a, const np_body *b, int
     in->ntb = sh->toff[sb + 1] - sh->toff[sb];
     in->vt_b_off = sh->vt_off + sh->voff[sb] + sb;
     in->vt_b = sh->vt + 3 * sh->toff[sb];
-    /* no vertex clusters in the engine's shape tables yet: the filter projects every vertex */
-    in->vc_a = in->vc_b = 0;
-    in->disc_a = in->disc_b = 0;
+    np_clusters(sh, sa, &in->vc_a, &in->disc_a);
+    np_clusters(sh, sb, &in->vc_b, &in->disc_b);
     in->sa = a->size;
     const pd_real *qa = a->q, *qb = b->q;
     pd_real qr[4];

@@ -1161,6 +1161,43 @@ PD_FN int ovl_cluster_beyond(PD_GLOBAL const pd_real *v, PD_GLOBAL const int *vc
     return n;
 }
 
+/*
+ * eq. 5.4's projections of all n vertices of v on dd into proj (side 0: A's, as they are; 1: B's,
+ * plus off), with the running extreme *ext (A's highest, B's lowest) and the largest magnitude
+ * *scale. These loops are the part of a pair's cost that grows with the meshes whatever the
+ * overlap (a quarter of a 1280-triangle icosphere pair's time): locals, not the context's fields
+ * (which the stores might alias), and max instructions rather than branches keep them to a few
+ * instructions a vertex. Two vertices a round into two sets of extremes halve the chain of
+ * dependent max instructions that bounded them; max and min are exact, so the extremes do not
+ * depend on the order. side is a constant where this inlines (PD_FN), so it costs no branch.
+ */
+PD_FN void ovl_project_all(PD_GLOBAL const pd_real *v, int n, pd_v3 dd, pd_real off, int side,
+                           PD_GLOBAL pd_real *proj, pd_real *ext, pd_real *scale)
+{
+    pd_real e = *ext, eo = e, sc = *scale, so = sc;
+    int i = 0;
+    for (; i + 1 < n; i += 2) {
+        pd_real p = v3_dot(v3_load(v, i), dd), q = v3_dot(v3_load(v, i + 1), dd);
+        p = side ? p + off : p;
+        q = side ? q + off : q;
+        proj[i] = p;
+        proj[i + 1] = q;
+        e = side ? pd_min(e, p) : pd_max(e, p);
+        eo = side ? pd_min(eo, q) : pd_max(eo, q);
+        sc = pd_max(sc, PD_FABS(p));
+        so = pd_max(so, PD_FABS(q));
+    }
+    if (i < n) {
+        pd_real p = v3_dot(v3_load(v, i), dd);
+        p = side ? p + off : p;
+        proj[i] = p;
+        e = side ? pd_min(e, p) : pd_max(e, p);
+        sc = pd_max(sc, PD_FABS(p));
+    }
+    *ext = side ? pd_min(e, eo) : pd_max(e, eo);
+    *scale = pd_max(sc, so);
+}
+
 PD_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out)
 {
     *pad_out = PD_R(0);
@@ -1226,21 +1263,13 @@ PD_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out)
     pd_real trd = in->tr[0] * d.x + in->tr[1] * d.y + in->tr[2] * d.z;
 
     /* eq. 5.4: extents; eq. 5.5: keep the triangles reaching into the other's half-plane */
-    /*
-     * The two loops over every vertex are the part of a pair's cost that grows with the meshes
-     * whatever the overlap (a quarter of a 1280-triangle icosphere pair's time): locals, not c's
-     * fields (which the stores might alias), and max instructions rather than branches keep them
-     * to a few instructions a vertex. Two vertices a round into two sets of extremes halve the
-     * chain of dependent max instructions that bounded them; max and min are exact, so the
-     * extremes do not depend on the order.
-     */
     pd_real e1 = -PD_REAL_MAX, e2 = PD_REAL_MAX, scale = PD_R(0);
-    pd_v3 da = v3_scale(d, in->sa);
+    pd_v3 da = v3_scale(d, in->sa); /* A's projections are (sa v) . d, for the padded filter */
     /*
      * With the vertex clusters, only those that can hold an extreme are projected here (the
      * scale wants both extremes of each mesh) and later those that can reach the other's
-     * half-plane: at a contact's depth a few clusters of each mesh, where the loops below
-     * project every vertex. The same values come out, so the same triangles are kept.
+     * half-plane: at a contact's depth a few clusters of each mesh, where ovl_project_all
+     * projects every vertex. The same values come out, so the same triangles are kept.
      */
     c->clustered = c->filter && !open_b && in->vt_a_off && in->vt_b_off && in->vc_a && in->vc_b &&
                    in->disc_a && in->disc_b && in->nva + in->nvb >= OVL_CLUSTER_MIN;
@@ -1252,47 +1281,8 @@ PD_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out)
                              c->done_b, &e2, &bmax);
         scale = pd_max(pd_max(PD_FABS(amin), PD_FABS(e1)), pd_max(PD_FABS(e2), PD_FABS(bmax)));
     } else {
-        PD_GLOBAL const pd_real *va = in->va, *vb = in->vb;
-        PD_GLOBAL pd_real *pa = c->proj_a, *pb = c->proj_b;
-        int nva = in->nva, nvb = in->nvb;
-        pd_real e1o = e1, e2o = e2, so = scale;
-        int i = 0;
-        for (; i + 1 < nva; i += 2) {
-            pd_real p = v3_dot(v3_load(va, i), da); /* = (sa v) . d, for the padded filter */
-            pd_real q = v3_dot(v3_load(va, i + 1), da);
-            pa[i] = p;
-            pa[i + 1] = q;
-            e1 = pd_max(e1, p);
-            e1o = pd_max(e1o, q);
-            scale = pd_max(scale, PD_FABS(p));
-            so = pd_max(so, PD_FABS(q));
-        }
-        if (i < nva) {
-            pd_real p = v3_dot(v3_load(va, i), da);
-            pa[i] = p;
-            e1 = pd_max(e1, p);
-            scale = pd_max(scale, PD_FABS(p));
-        }
-        int j = 0;
-        for (; j + 1 < nvb; j += 2) {
-            pd_real p = v3_dot(v3_load(vb, j), db) + trd;
-            pd_real q = v3_dot(v3_load(vb, j + 1), db) + trd;
-            pb[j] = p;
-            pb[j + 1] = q;
-            e2 = pd_min(e2, p);
-            e2o = pd_min(e2o, q);
-            scale = pd_max(scale, PD_FABS(p));
-            so = pd_max(so, PD_FABS(q));
-        }
-        if (j < nvb) {
-            pd_real p = v3_dot(v3_load(vb, j), db) + trd;
-            pb[j] = p;
-            e2 = pd_min(e2, p);
-            scale = pd_max(scale, PD_FABS(p));
-        }
-        e1 = pd_max(e1, e1o);
-        e2 = pd_min(e2, e2o);
-        scale = pd_max(scale, so);
+        ovl_project_all(in->va, in->nva, da, PD_R(0), 0, c->proj_a, &e1, &scale);
+        ovl_project_all(in->vb, in->nvb, db, trd, 1, c->proj_b, &e2, &scale);
     }
     /*
      * The half-planes are widened by OVL_CULL resolutions (OVL_SNAP L, L the largest coordinate

@@ -38,13 +38,13 @@ static void shapes_free(shape_set *t)
         pd_mesh_destroy(t->m[s]);
 }
 
-static int shapes_build(shape_set *t)
+/* The shapes names[s] with tris[s] triangles (0: the built-in's own count). */
+static int shapes_build_of(shape_set *t, const char *const names[NSHAPE], const int tris[NSHAPE])
 {
-    const char *names[NSHAPE] = {"schonhardt", "rock", "cube"};
     memset(t, 0, sizeof *t);
     int *voff = t->voff, *toff = t->toff;
     for (int s = 0; s < NSHAPE; s++) {
-        t->m[s] = unit_shape(names[s], s == 1 ? 80 : 0);
+        t->m[s] = unit_shape(names[s], tris[s]);
         if (!t->m[s]) {
             TEST_FAILF("builtin %s", names[s]);
             shapes_free(t);
@@ -80,9 +80,39 @@ static int shapes_build(shape_set *t)
             }
         free(fill);
     }
-    np_shapes sh = {vert, tri, voff, toff, vt_off, vt};
+    np_shapes sh = {vert, tri, voff, toff, vt_off, vt, NULL, NULL, NULL};
     t->sh = sh;
     return 0;
+}
+
+static int shapes_build(shape_set *t)
+{
+    static const char *const names[NSHAPE] = {"schonhardt", "rock", "cube"};
+    static const int tris[NSHAPE] = {0, 80, 0};
+    return shapes_build_of(t, names, tris);
+}
+
+/*
+ * The overlap of bodies a and b by the engine's narrow phase (host build), in world coordinates,
+ * into *o and, where rec is not NULL, as 12 doubles: hit, degenerate, kept_a, kept_b, volume,
+ * centroid, normal, depth (the leading fields of the kernels' record).
+ */
+static void np_host(const np_shapes *sh, const np_body *a, const np_body *b, int *iscr,
+                    double *rscr, int cap, ovl_out *o, double *rec)
+{
+    ovl_in in;
+    double ra[9];
+    np_setup(sh, a, b, 0, &in, ra);
+    in.iscr = iscr;
+    in.rscr = rscr;
+    in.pts_cap = cap;
+    ovl_compute(&in, o);
+    np_to_world(a, ra, o);
+    if (!rec) return;
+    double h[12] = {o->hit,      o->degenerate, o->kept_a,     o->kept_b,
+                    o->volume,   o->centroid.x, o->centroid.y, o->centroid.z,
+                    o->normal.x, o->normal.y,   o->normal.z,   o->depth};
+    memcpy(rec, h, sizeof h);
 }
 
 TEST(pairs_match_overlap_of_posed_scaled_meshes)
@@ -112,21 +142,11 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
     double host[12 * NBODY * NBODY];
     for (int i = 0; i < NBODY; i++)
         for (int j = i + 1; j < NBODY; j++) {
-            ovl_in in;
-            double ra[9];
-            np_setup(&sh, &b[i], &b[j], 0, &in, ra);
-            in.iscr = iscr;
-            in.rscr = rscr;
-            in.pts_cap = cap;
             ovl_out o;
-            ovl_compute(&in, &o);
-            np_to_world(&b[i], ra, &o);
+            np_host(&sh, &b[i], &b[j], iscr, rscr, cap, &o, host + 12 * npairs);
             pairs[2 * npairs] = i;
             pairs[2 * npairs + 1] = j;
-            double h[12] = {o.hit,      o.degenerate, o.kept_a,     o.kept_b,
-                            o.volume,   o.centroid.x, o.centroid.y, o.centroid.z,
-                            o.normal.x, o.normal.y,   o.normal.z,   o.depth};
-            memcpy(host + 12 * npairs++, h, sizeof h);
+            npairs++;
             /* reference: the meshes scaled by size, posed by (x, q) */
             pd_mesh *ma = NULL, *mb = NULL;
             pd_error err = {0};
@@ -178,7 +198,7 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
         size[i] = b[i].size;
         shape[i] = b[i].shape;
     }
-    np_tables tabs = {NSHAPE, vert, tri, voff, toff, vt_off, vt};
+    np_tables tabs = {NSHAPE, vert, tri, voff, toff, vt_off, vt, NULL, NULL, NULL};
     if (pd_device_open(-1, &dev, &err) != PD_OK ||
         np_run_cl(dev, &tabs, x, q, size, shape, NBODY, pairs, npairs, 1, dout, &err) != PD_OK) {
         TEST_FAILF("opencl narrow phase: %s", err.msg);
@@ -203,14 +223,8 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
 static int overlaps(const np_shapes *sh, const np_body *a, const np_body *b, int *iscr,
                     double *rscr, int cap)
 {
-    ovl_in in;
-    double ra[9];
-    np_setup(sh, a, b, 0, &in, ra);
-    in.iscr = iscr;
-    in.rscr = rscr;
-    in.pts_cap = cap;
     ovl_out o;
-    ovl_compute(&in, &o);
+    np_host(sh, a, b, iscr, rscr, cap, &o, NULL);
     return o.hit;
 }
 
@@ -328,9 +342,146 @@ TEST(separation_gaps_are_lower_bounds)
     shapes_free(&set);
 }
 
+/*
+ * The filter's vertex clusters in the engine's shape tables (np_cluster_tables, np_shapes' vc,
+ * coff, disc): for shapes large enough to use them (OVL_CLUSTER_MIN vertices a pair), the narrow
+ * phase gives bit for bit what it gives without them, on the host and through the OpenCL kernel
+ * in both precisions (the clusters only spare projections, kernels/overlap.h). The discs are
+ * read: with their radius and thickness zeroed, the bounds miss vertices and results change.
+ */
+TEST(clustered_narrow_phase_matches_unclustered)
+{
+    static const char *const names[NSHAPE] = {"rock", "icosphere", "rock"};
+    static const int tris[NSHAPE] = {2500, 5120, 4000};
+    enum { NP = 24 };
+    shape_set set;
+    if (shapes_build_of(&set, names, tris)) return;
+    int *vc = NULL, *coff = NULL;
+    double *disc = NULL;
+    if (np_cluster_tables(set.vert, set.voff, NSHAPE, NSHAPE, &vc, &coff, &disc) != PD_OK) {
+        TEST_FAILF("np_cluster_tables: out of memory");
+        shapes_free(&set);
+        return;
+    }
+    np_shapes plain = set.sh, clus = set.sh;
+    clus.vc = vc;
+    clus.coff = coff;
+    clus.disc = disc;
+    int nt = set.toff[NSHAPE], nv = set.voff[NSHAPE], cap = 4096;
+    int *iscr = malloc(sizeof(int) * ovl_iscratch_len(nt, nt, nv, nv));
+    double *rscr = malloc(sizeof(double) * ovl_rscratch_len(nt, nt, nv, nv, cap));
+    double x[3 * 2 * NP], q[4 * 2 * NP], size[2 * NP], ref[12 * NP], rec[12];
+    int shape[2 * NP], pairs[2 * NP], hits = 0, same = 1;
+    np_body b[2 * NP];
+    for (int p = 0; p < NP; p++) {
+        np_body *a = &b[2 * p], *c = &b[2 * p + 1];
+        a->shape = p % NSHAPE;
+        c->shape = (p / NSHAPE + 1) % NSHAPE;
+        a->size = 0.2 + 0.3 * rnd();
+        c->size = 0.2 + 0.3 * rnd();
+        rnd_quat(a->q);
+        rnd_quat(c->q);
+        a->x = v3(rnd(), rnd(), rnd());
+        /* centres about a size apart: shallow overlaps, the DEM's, and near misses */
+        pd_v3 d = v3_unit(v3(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5));
+        c->x = v3_add(a->x, v3_scale(d, 0.5 * (a->size + c->size) * (0.85 + 0.2 * rnd())));
+        ovl_out o;
+        np_host(&plain, a, c, iscr, rscr, cap, &o, ref + 12 * p);
+        np_host(&clus, a, c, iscr, rscr, cap, &o, rec);
+        same &= memcmp(rec, ref + 12 * p, sizeof rec) == 0;
+        hits += o.hit;
+        for (int k = 0; k < 2; k++) {
+            const np_body *e = &b[2 * p + k];
+            x[3 * (2 * p + k)] = e->x.x;
+            x[3 * (2 * p + k) + 1] = e->x.y;
+            x[3 * (2 * p + k) + 2] = e->x.z;
+            memcpy(q + 4 * (2 * p + k), e->q, sizeof e->q);
+            size[2 * p + k] = e->size;
+            shape[2 * p + k] = e->shape;
+            pairs[2 * p + k] = 2 * p + k;
+        }
+    }
+    printf("  %d pairs of %d-%d triangles, %d overlapping\n", NP, tris[0], tris[1], hits);
+    CHECK(same);
+    CHECK(hits >= NP / 3);
+
+    /* discs with no radius or thickness: the clusters are what the filter reads */
+    double *flat = malloc(sizeof(double) * NP_DISC_LEN * (size_t)coff[NSHAPE]);
+    memcpy(flat, disc, sizeof(double) * NP_DISC_LEN * (size_t)coff[NSHAPE]);
+    for (int k = 0; k < coff[NSHAPE]; k++)
+        flat[NP_DISC_LEN * k + 6] = flat[NP_DISC_LEN * k + 7] = 0;
+    np_shapes bad = clus;
+    bad.disc = flat;
+    int changed = 0;
+    for (int p = 0; p < NP; p++) {
+        ovl_out o;
+        np_host(&bad, &b[2 * p], &b[2 * p + 1], iscr, rscr, cap, &o, rec);
+        changed += memcmp(rec, ref + 12 * p, sizeof rec) != 0;
+    }
+    printf("  with flattened discs %d of %d pairs change\n", changed, NP);
+    CHECK(changed > 0);
+
+    /* the OpenCL kernel with the clusters: the host's numbers (double, as in the test above), and
+     * in single precision its own numbers without them, bit for bit */
+    pd_device *dev = NULL;
+    pd_error err = {0};
+    double *d1 = malloc(sizeof(double) * OVL_RESULT_LEN * NP),
+           *s0 = malloc(sizeof(double) * OVL_RESULT_LEN * NP),
+           *s1 = malloc(sizeof(double) * OVL_RESULT_LEN * NP),
+           *sf = malloc(sizeof(double) * OVL_RESULT_LEN * NP);
+    np_tables tp = {NSHAPE,     set.vert, set.tri, set.voff, set.toff,
+                    set.vt_off, set.vt,   NULL,    NULL,     NULL},
+              tc = tp, tf;
+    tc.vc = vc;
+    tc.coff = coff;
+    tc.disc = disc;
+    tf = tc;
+    tf.disc = flat;
+    if (pd_device_open(-1, &dev, &err) != PD_OK ||
+        np_run_cl(dev, &tc, x, q, size, shape, 2 * NP, pairs, NP, 1, d1, &err) != PD_OK ||
+        np_run_cl(dev, &tp, x, q, size, shape, 2 * NP, pairs, NP, 0, s0, &err) != PD_OK ||
+        np_run_cl(dev, &tc, x, q, size, shape, 2 * NP, pairs, NP, 0, s1, &err) != PD_OK ||
+        np_run_cl(dev, &tf, x, q, size, shape, 2 * NP, pairs, NP, 0, sf, &err) != PD_OK) {
+        TEST_FAILF("opencl narrow phase: %s", err.msg);
+    } else {
+        int agree = 1, single_same = 1, single_hits = 0, flat_changed = 0;
+        for (int p = 0; p < NP; p++) {
+            const double *h = ref + 12 * p, *d = d1 + OVL_RESULT_LEN * p;
+            agree &= h[0] == d[0];
+            for (int c = 4; c < 12; c++)
+                agree &= fabs(h[c] - d[c]) <= 1e-12 * (fabs(h[c]) + (c == 4 ? 0 : b[0].size));
+            for (int c = 0; c < OVL_RESULT_LEN; c++)
+                single_same &= s0[OVL_RESULT_LEN * p + c] == s1[OVL_RESULT_LEN * p + c];
+            single_hits += s1[OVL_RESULT_LEN * p] != 0;
+            flat_changed += memcmp(sf + OVL_RESULT_LEN * p, s0 + OVL_RESULT_LEN * p,
+                                   sizeof(double) * OVL_RESULT_LEN) != 0;
+        }
+        printf("  opencl: double agrees %d, single with and without clusters the same %d (%d "
+               "overlapping), %d pairs changed by flattened discs\n",
+               agree, single_same, single_hits, flat_changed);
+        CHECK(flat_changed > 0); /* the kernel reads the clusters */
+        CHECK(agree);
+        CHECK(single_same);
+        CHECK(single_hits >= NP / 3);
+    }
+    pd_device_close(dev);
+    free(d1);
+    free(s0);
+    free(s1);
+    free(sf);
+    free(flat);
+    free(vc);
+    free(coff);
+    free(disc);
+    free(iscr);
+    free(rscr);
+    shapes_free(&set);
+}
+
 int main(void)
 {
     RUN(pairs_match_overlap_of_posed_scaled_meshes);
     RUN(separation_gaps_are_lower_bounds);
+    RUN(clustered_narrow_phase_matches_unclustered);
     return TEST_DONE();
 }

@@ -76,7 +76,7 @@ static void tables_make(pd_mesh *const *m, int ns, tables *t)
         free(off);
         free(list);
     }
-    np_shapes sh = {t->vert, t->tri, t->voff, t->toff, t->vt_off, t->vt};
+    np_shapes sh = {t->vert, t->tri, t->voff, t->toff, t->vt_off, t->vt, NULL, NULL, NULL};
     t->sh = sh;
 }
 
