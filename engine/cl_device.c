@@ -542,7 +542,7 @@ int np_run_cl(pd_device *dev, const np_tables *t, const double *x, const double 
     void *hout = malloc(rs * OVL_RESULT_LEN * (size_t)npairs);
     rc = PD_OK;
     for (int i = 0; i < 5; i++) {
-        host[i] = malloc(rs * (len[i] ? len[i] : 1));
+        host[i] = calloc(len[i] ? len[i] : 1, rs);
         if (!host[i])
             rc = PD_ENOMEM;
         else if (len[i])

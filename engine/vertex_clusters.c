@@ -152,9 +152,9 @@ int np_cluster_tables(const double *vert, const int *voff, int nshape, int nclus
     if (!coff) return PD_ENOMEM;
     for (int s = 0; s < nshape; s++)
         coff[s + 1] = coff[s] + (s < nclust ? ovl_nclusters(voff[s + 1] - voff[s]) : 0);
-    /* one element at least: an empty table is still a buffer for the kernels */
-    int *vc = malloc(sizeof *vc * (2 * (size_t)voff[nclust] + 1));
-    double *disc = malloc(sizeof *disc * (OVL_DISC * (size_t)coff[nshape] + 1));
+    /* one element at least, and zeroed: an empty table is still a buffer the kernels get */
+    int *vc = calloc(2 * (size_t)voff[nclust] + 1, sizeof *vc);
+    double *disc = calloc(OVL_DISC * (size_t)coff[nshape] + 1, sizeof *disc);
     int rc = vc && disc ? PD_OK : PD_ENOMEM;
     for (int s = 0; s < nclust && rc == PD_OK; s++) {
         int nv = voff[s + 1] - voff[s], *svc;
