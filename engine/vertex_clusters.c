@@ -7,7 +7,6 @@
  */
 #include <math.h>
 #include <stdlib.h>
-#include <string.h>
 
 #define PD_DOUBLE 1 /* the kernels' cluster sizes (overlap_predicates.h); the discs are doubles */
 #include "mesh_internal.h"
@@ -118,27 +117,34 @@ static void vc_disc(const double *v, const int *vc, int n, double *b)
     b[8] = reach * (1 + 1e-6);
 }
 
-int ovl_vertex_clusters(const double *v, int nv, int **vc_out, double **disc_out)
+/* The clusters of the nv vertices v into vc (2 nv ints) and disc (ovl_discs_len(nv) reals), as
+ * ovl_in's vc_* and disc_* read them. Returns PD_OK or PD_ENOMEM (for its scratch). */
+static int vc_build(const double *v, int nv, int *vc, double *disc)
 {
-    int ncl = ovl_nclusters(nv);
-    int *vc = malloc(sizeof *vc * 2 * (size_t)(nv > 0 ? nv : 1));
-    double *disc = malloc(sizeof *disc * OVL_DISC * (size_t)(ncl > 0 ? ncl : 1));
     vc_key *key = malloc(sizeof *key * (size_t)(nv > 0 ? nv : 1));
-    if (!vc || !disc || !key) {
-        free(vc);
-        free(disc);
-        free(key);
-        return PD_ENOMEM;
-    }
+    if (!key) return PD_ENOMEM;
     for (int h = 0; h < nv; h++)
         vc[h] = h;
     vc_split(v, vc, nv, key);
     for (int h = 0; h < nv; h++)
         vc[nv + vc[h]] = h / OVL_CLUSTER;
     free(key);
-    for (int c = 0; c < ncl; c++) {
+    for (int c = 0; c < ovl_nclusters(nv); c++) {
         int end = (c + 1) * OVL_CLUSTER < nv ? (c + 1) * OVL_CLUSTER : nv;
         vc_disc(v, vc + c * OVL_CLUSTER, end - c * OVL_CLUSTER, disc + OVL_DISC * c);
+    }
+    return PD_OK;
+}
+
+int ovl_vertex_clusters(const double *v, int nv, int **vc_out, double **disc_out)
+{
+    int ncl = ovl_nclusters(nv);
+    int *vc = malloc(sizeof *vc * 2 * (size_t)(nv > 0 ? nv : 1));
+    double *disc = malloc(sizeof *disc * OVL_DISC * (size_t)(ncl > 0 ? ncl : 1));
+    if (!vc || !disc || vc_build(v, nv, vc, disc) != PD_OK) {
+        free(vc);
+        free(disc);
+        return PD_ENOMEM;
     }
     *vc_out = vc;
     *disc_out = disc;
@@ -156,17 +162,10 @@ int np_cluster_tables(const double *vert, const int *voff, int nshape, int nclus
     int *vc = calloc(2 * (size_t)voff[nclust] + 1, sizeof *vc);
     double *disc = calloc(OVL_DISC * (size_t)coff[nshape] + 1, sizeof *disc);
     int rc = vc && disc ? PD_OK : PD_ENOMEM;
-    for (int s = 0; s < nclust && rc == PD_OK; s++) {
-        int nv = voff[s + 1] - voff[s], *svc;
-        double *sdisc;
-        if (nv == 0) continue; /* an analytic sphere */
-        rc = ovl_vertex_clusters(vert + 3 * (size_t)voff[s], nv, &svc, &sdisc);
-        if (rc != PD_OK) break;
-        memcpy(vc + 2 * (size_t)voff[s], svc, sizeof *vc * 2 * (size_t)nv);
-        memcpy(disc + OVL_DISC * (size_t)coff[s], sdisc, sizeof *disc * ovl_discs_len(nv));
-        free(svc);
-        free(sdisc);
-    }
+    /* each shape's straight into its place (an analytic sphere has no vertices, nothing to do) */
+    for (int s = 0; s < nclust && rc == PD_OK; s++)
+        rc = vc_build(vert + 3 * (size_t)voff[s], voff[s + 1] - voff[s], vc + 2 * (size_t)voff[s],
+                      disc + OVL_DISC * (size_t)coff[s]);
     if (rc != PD_OK) {
         free(coff);
         free(vc);

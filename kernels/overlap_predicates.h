@@ -96,7 +96,7 @@ typedef struct ovl_in {
      * vertices that reach into the other's half-plane; NULL: it classifies every triangle */
     PD_GLOBAL const int *vt_a_off, *vt_a, *vt_b_off, *vt_b;
     /*
-     * optional vertex clusters (ovl_vertex_clusters in engine/overlap.c), with which the filter
+     * optional vertex clusters (engine/vertex_clusters.c), with which the filter
      * projects only the vertices of the clusters that can reach an extreme or the other's
      * half-plane instead of every vertex: vc (2 nv ints) lists the vertices cluster by cluster
      * (OVL_CLUSTER a cluster, the last one shorter) and then each vertex's cluster; disc
