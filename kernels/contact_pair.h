@@ -313,7 +313,7 @@ PD_FN int cp_inside_tree(const wb_tree *w, pd_v3 p)
     pd_real l =
         pd_max(v3_amax(p), pd_max(v3_amax(v3(b[0], b[1], b[2])), v3_amax(v3(b[3], b[4], b[5]))));
     c.pad = OVL_SNAP * l;
-    c.flip = c.degenerate = 0;
+    c.flip = c.wneg = c.degenerate = 0;
     pd_v3 r = v3_unit(v3(PD_R(0.5772156649), PD_R(0.6180339887), PD_R(0.5336)));
     return ovl_tree_parity(&c, w, 0, p, r, p, r);
 }

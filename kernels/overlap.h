@@ -736,9 +736,18 @@ typedef struct ovl_sums {
     pd_real vol, vol_abs, smag; /* smag: the sum of |area| its terms came from */
     pd_v3 mom, sdiff;           /* mom about A's frame origin */
     pd_real open;               /* the larger |area_a + area_b| of the passes (ovl_compute_try) */
+    int closed;                 /* bit k: pass k (0: +w, 1: -w) closes on its own (ovl_closes) */
 } ovl_sums;
 
-/* Sums the cusps about c->origin (c->flip must be 0; c->degenerate is set by the first pass). */
+/* Whether a pass's cusps close a surface: its area vectors cancel to their sums' rounding (see
+ * ovl_compute_try). */
+PD_FN int ovl_closes(const ovl_ctx *c)
+{
+    return !(v3_norm(v3_add(c->area_a, c->area_b)) > PD_R(1e4) * PD_EPS * c->area_abs);
+}
+
+/* Sums the cusps about c->origin (c->flip must be 0; c->degenerate is set by the first pass; with
+ * c->one_pass a degenerate pair keeps its first pass alone). */
 PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
 {
     ovl_pass(c);
@@ -748,7 +757,8 @@ PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
     s->sdiff = v3_sub(c->area_a, c->area_b);
     s->smag = c->area_abs;
     s->open = v3_norm(v3_add(c->area_a, c->area_b));
-    if (c->degenerate) {
+    s->closed = ovl_closes(c);
+    if (c->degenerate && !c->one_pass) {
         /* coplanar faces may have been owned by one side only: repeat with -w and average */
         int store = c->store_pts;
         c->flip = 1;
@@ -756,6 +766,7 @@ PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
         ovl_pass(c);
         pd_v3 s2 = v3_sub(c->area_a, c->area_b);
         s->open = pd_max(s->open, v3_norm(v3_add(c->area_a, c->area_b)));
+        s->closed |= 2 * ovl_closes(c);
         s->vol = PD_R(0.5) * (s->vol + c->vol);
         s->vol_abs = pd_max(s->vol_abs, c->vol_abs);
         s->mom = v3_scale(v3_add(s->mom, c->moment), PD_R(0.5));
@@ -1021,11 +1032,6 @@ PD_FN void ovl_rescue(ovl_ctx *c, ovl_sums *sm)
 }
 
 /*
- * One evaluation of the overlap (ovl_compute). Returns 0 when the predicates were found to
- * disagree about the geometry (the overlap's surface does not close), 1 otherwise; *pad: the
- * resolution it worked at.
- */
-/*
  * Lists in out the vertices whose projections reach into the other's half-plane (sgn 1: proj >= e,
  * -1: proj <= e), without a branch, in two runs of independent counts (the halves of the
  * vertices, joined at the end); returns their number. out holds n.
@@ -1198,11 +1204,21 @@ PD_FN void ovl_project_all(PD_GLOBAL const pd_real *v, int n, pd_v3 dd, pd_real 
     *scale = pd_max(sc, so);
 }
 
-PD_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out)
+/*
+ * One evaluation of the overlap (ovl_compute). Returns 0 when the predicates were found to
+ * disagree about the geometry (the overlap's surface does not close), 1 otherwise; *pad: the
+ * resolution it worked at; *sides: which of a degenerate pair's passes closed on their own
+ * (ovl_sums.closed). one_side 1 (2): a degenerate pair takes its first pass alone, with B
+ * displaced by +eps w (-eps w), not the average with the other.
+ */
+PD_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out, int one_side, int *sides)
 {
     *pad_out = PD_R(0);
+    *sides = 0;
     ovl_ctx cx;
     ovl_ctx *c = &cx;
+    c->one_pass = one_side != 0;
+    c->wneg = one_side == 2;
     c->in = in;
     c->filter = !(in->flags & OVL_NO_FILTER);
     c->kept_a = in->iscr;
@@ -1534,6 +1550,7 @@ refilter:
      * out as a miss, the sum exceeding the nodes' box).
      */
     int closed = !(sm.open > PD_R(1e4) * PD_EPS * smag);
+    *sides = degenerate ? sm.closed : 0;
     /* touching, or round-off of a touching contact: within 100 ulps of the cusps' magnitudes */
     if (!(vol > PD_R(100) * PD_EPS * sm.vol_abs)) {
         ovl_miss(o, c);
@@ -1603,35 +1620,110 @@ refilter:
 }
 
 /*
+ * o becomes the mean of o and p, two overlaps (hits) of B moved by +u and by -u (ovl_compute):
+ * volume, moments and area vectors are smooth in the displacement, so their means are the
+ * overlap's at u = 0 up to terms in u^2.
+ */
+PD_FN void ovl_out_mean(ovl_out *o, const ovl_out *p)
+{
+    pd_real v = o->volume + p->volume, ve = o->vol_eff + p->vol_eff;
+    if (v > PD_R(0))
+        o->centroid =
+            v3_scale(v3_add(v3_scale(o->centroid, o->volume), v3_scale(p->centroid, p->volume)),
+                     PD_R(1) / v);
+    if (ve > PD_R(0))
+        o->point_eff =
+            v3_scale(v3_add(v3_scale(o->point_eff, o->vol_eff), v3_scale(p->point_eff, p->vol_eff)),
+                     PD_R(1) / ve);
+    pd_v3 n = v3_add(v3_scale(o->normal, o->area), v3_scale(p->normal, p->area));
+    pd_real nn = v3_norm(n);
+    if (nn > PD_R(0)) o->normal = v3_scale(n, PD_R(1) / nn);
+    o->volume = PD_R(0.5) * v;
+    o->vol_eff = PD_R(0.5) * ve;
+    o->depth = PD_R(0.5) * (o->depth + p->depth);
+    o->depth_eff = PD_R(0.5) * (o->depth_eff + p->depth_eff);
+    o->area = PD_R(0.5) * (o->area + p->area);
+    o->places = o->places > p->places ? o->places : p->places;
+    o->degenerate |= p->degenerate;
+}
+
+/*
  * The overlap of A and B: volume, centroid, normal and depth (section 4.2). Where the
  * predicates disagree (ovl_compute_try: the surface does not close, or the volume exceeds the
  * nodes' box), B is moved by 8 resolutions along one of three fixed
  * directions of unrelated components and the overlap taken again: offsets that lay at the edge
- * of the tie band (2 resolutions) are then either well inside it or well out of it, and 8
- * resolutions (5e-16 m for 2 cm particles) change no force measurably. The last three tries
- * also turn d, the filter's direction and the rays', by ~0.3 rad (any d bounds the filter):
- * without the filter, two boxes 3e-13 m from coplanar summed to a closed half of one box in
- * every try, a corner's side decided by one ray along d. Where none of the six agrees, the pair
- * counts as not touching this step.
+ * of the tie band (2 resolutions) are then either well inside it or well out of it. The last
+ * three directions also turn d, the filter's direction and the rays', by ~0.3 rad (any d bounds
+ * the filter): without the filter, two boxes 3e-13 m from coplanar summed to a closed half of one
+ * box in every try, a corner's side decided by one ray along d.
+ *
+ * Each direction is taken both ways, B moved by +u and by -u, and where both agree the answer is
+ * their mean (ovl_out_mean), in which the displacement cancels to first order; where one way
+ * touches and the other does not, the pair lies within the move of touching and counts as not
+ * touching yet (the mean of a miss and a hit gave a resting Schonhardt prism on a meshed floor a
+ * kick of 0.016 m/s in single precision, tests/physics/test_sim.c,
+ * single_precision_flat_face_on_a_meshed_floor). 8 resolutions are
+ * 5e-16 m for 2 cm particles in double precision, but ~1.5e-6 m in single, a fifth to a half of
+ * a resting contact's depth: one way alone came out 10-86 % off in volume for 27 of 567 resting
+ * contacts of a lattice of cubes settling in single precision (bench/RESULTS.md, 2026-12-06
+ * evening). A direction that agrees one way only is kept for last.
+ *
+ * Where no direction agrees both ways, a degenerate pair one of whose two passes (B displaced by
+ * +eps w and by -eps w) closed on its own in the first try is taken from that pass alone: its
+ * combinatorics describe one configuration, B displaced, whose volume and centroid are the
+ * exact ones at eps = 0, and its normal counts a face shared with the other solid on one side
+ * only (what the second pass is averaged in for). Resting faces nearly parallel, a few tenths of
+ * a milliradian apart, with corners within the tie band of the other's face, lead there in
+ * single precision, where a resolution is ~2e-7 m for 2 cm particles and 8 of them move B by
+ * a fifth of a resting contact's depth: 11 of the 48 contacts of a settled lattice of cubes
+ * (examples/cube_lattice.json) had each of their tries' -w or +w pass open, and were lost
+ * (tests/physics/test_overlap.c, resting_cubes_in_single_precision). Failing that, the first
+ * direction that agreed one way is the answer; where none did, the pair counts as not touching
+ * this step.
  */
 PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
 {
     pd_real pad = PD_R(0);
-    if (ovl_compute_try(in, o, &pad)) return;
+    int sides = 0, first;
+    if (ovl_compute_try(in, o, &pad, 0, &first)) return;
     const pd_real dir[9] = {PD_R(0.5377), PD_R(0.7183), PD_R(0.4412),  PD_R(-0.6626), PD_R(0.2361),
                             PD_R(0.7107), PD_R(0.3119), PD_R(-0.8231), PD_R(0.4745)};
     ovl_in sh = *in;
+    ovl_out lone, back;
+    int have_lone = 0;
     pd_real span = v3_norm(v3_sub(in->cb, in->ca));
     for (int k = 0; k < 6; k++) {
-        pd_real m = PD_R(8) * pad;
+        pd_real m = PD_R(8) * pad, pad_back;
         int kd = k % 3;
         pd_v3 e = v3(dir[3 * kd], dir[3 * kd + 1], dir[3 * kd + 2]), u = v3_scale(e, m);
+        /* the last three also turn d (the filter's direction and the rays') by ~0.3 rad: the
+         * centre line moves with B by u and sideways by the turn, the same both ways */
+        pd_v3 turn = v3_scale(e, k < 3 ? PD_R(0) : PD_R(0.3) * span);
         sh.tr[0] = in->tr[0] + u.x;
         sh.tr[1] = in->tr[1] + u.y;
         sh.tr[2] = in->tr[2] + u.z;
-        /* the last three also turn d (the filter's direction and the rays') by ~0.3 rad */
-        sh.cb = v3_add(in->cb, v3_scale(e, k < 3 ? m : m + PD_R(0.3) * span));
-        if (ovl_compute_try(&sh, o, &pad)) return;
+        sh.cb = v3_add(v3_add(in->cb, u), turn);
+        if (!ovl_compute_try(&sh, o, &pad, 0, &sides)) continue;
+        sh.tr[0] = in->tr[0] - u.x;
+        sh.tr[1] = in->tr[1] - u.y;
+        sh.tr[2] = in->tr[2] - u.z;
+        sh.cb = v3_add(v3_sub(in->cb, u), turn);
+        if (ovl_compute_try(&sh, &back, &pad_back, 0, &sides)) {
+            if (o->hit && back.hit)
+                ovl_out_mean(o, &back);
+            else if (!back.hit) /* touching at most one way: the miss */
+                *o = back;
+            return;
+        }
+        if (!have_lone) lone = *o;
+        have_lone = 1;
+    }
+    /* one pass alone, where exactly one closed (where both did, the box guards found them
+     * disagreeing otherwise, and neither is trusted) */
+    if ((first == 1 || first == 2) && ovl_compute_try(in, o, &pad, first, &sides)) return;
+    if (have_lone) { /* moved one way only */
+        *o = lone;
+        return;
     }
     o->hit = 0; /* no force from sums the predicates could not agree on */
     o->volume = o->depth = o->area = o->vol_eff = o->depth_eff = PD_R(0);

@@ -277,8 +277,13 @@ typedef struct ovl_ctx {
     int node_org; /* OVL_RESCUE: each node's cusps are taken about its place's centre (ORG) */
     PD_GLOBAL int *nd_i;
     PD_GLOBAL pd_real *nd_r;
-    pd_real pad;    /* OVL_SNAP * L: the configuration's length resolution */
-    int flip;       /* 0: B displaced by +eps w, 1: by -eps w */
+    pd_real pad; /* OVL_SNAP * L: the configuration's length resolution */
+    int flip;    /* 0: B displaced by +eps w, 1: by -eps w */
+    /*
+     * ovl_compute's last resort (ovl_compute_try's one_side): one pass only, with w (wneg 0) or -w
+     * (wneg 1) for the first pass's displacement
+     */
+    int one_pass, wneg;
     int degenerate; /* a predicate was exactly zero */
     /* cusp sums, about `origin` (A's frame origin, or the nodes' centre when re-summed) */
     pd_v3 origin;
@@ -429,7 +434,7 @@ PD_FN int ovl_tie(ovl_ctx *c, pd_v3 g)
             : g.z > gt  ? 1
             : g.z < -gt ? -1
                         : 0;
-    return c->flip ? -s : s;
+    return c->flip != c->wneg ? -s : s;
 }
 
 PD_FN pd_v3 ovl_va(const ovl_ctx *c, int i)
