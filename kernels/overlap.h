@@ -739,11 +739,11 @@ typedef struct ovl_sums {
     int closed;                 /* bit k: pass k (0: +w, 1: -w) closes on its own (ovl_closes) */
 } ovl_sums;
 
-/* Whether a pass's cusps close a surface: its area vectors cancel to their sums' rounding (see
- * ovl_compute_try). */
-PD_FN int ovl_closes(const ovl_ctx *c)
+/* Whether cusps whose area vectors sum to a vector of norm open, from terms of summed norm mag,
+ * close a surface: to their sums' rounding (see ovl_compute_try). */
+PD_FN int ovl_closes(pd_real open, pd_real mag)
 {
-    return !(v3_norm(v3_add(c->area_a, c->area_b)) > PD_R(1e4) * PD_EPS * c->area_abs);
+    return !(open > PD_R(1e4) * PD_EPS * mag);
 }
 
 /* Sums the cusps about c->origin (c->flip must be 0; c->degenerate is set by the first pass; with
@@ -757,7 +757,7 @@ PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
     s->sdiff = v3_sub(c->area_a, c->area_b);
     s->smag = c->area_abs;
     s->open = v3_norm(v3_add(c->area_a, c->area_b));
-    s->closed = ovl_closes(c);
+    s->closed = ovl_closes(s->open, c->area_abs);
     if (c->degenerate && !c->one_pass) {
         /* coplanar faces may have been owned by one side only: repeat with -w and average */
         int store = c->store_pts;
@@ -765,8 +765,9 @@ PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
         c->store_pts = 0;
         ovl_pass(c);
         pd_v3 s2 = v3_sub(c->area_a, c->area_b);
-        s->open = pd_max(s->open, v3_norm(v3_add(c->area_a, c->area_b)));
-        s->closed |= 2 * ovl_closes(c);
+        pd_real open2 = v3_norm(v3_add(c->area_a, c->area_b));
+        s->open = pd_max(s->open, open2);
+        s->closed |= 2 * ovl_closes(open2, c->area_abs);
         s->vol = PD_R(0.5) * (s->vol + c->vol);
         s->vol_abs = pd_max(s->vol_abs, c->vol_abs);
         s->mom = v3_scale(v3_add(s->mom, c->moment), PD_R(0.5));
@@ -1549,7 +1550,7 @@ refilter:
      * (two boxes with faces coplanar in z and 1.9e-14 m apart in x overlapping by 0.69 m^3 came
      * out as a miss, the sum exceeding the nodes' box).
      */
-    int closed = !(sm.open > PD_R(1e4) * PD_EPS * smag);
+    int closed = ovl_closes(sm.open, smag);
     *sides = degenerate ? sm.closed : 0;
     /* touching, or round-off of a touching contact: within 100 ulps of the cusps' magnitudes */
     if (!(vol > PD_R(100) * PD_EPS * sm.vol_abs)) {

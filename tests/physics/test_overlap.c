@@ -734,20 +734,13 @@ TEST(boxes_within_the_tie_band_on_several_axes)
     CHECK_NEAR(1, rel, 0);
 }
 
-/*
- * Two 2 cm cubes of a column in a simulated lattice (bench/RESULTS.md, 2026-12-05), 1.1e-6 m
- * deep, their side faces within rounding of each other's in two directions and turned against
- * each other by 3e-14 rad: the predicates tied some of the near-coplanar corners and decided
- * others, and the cusps summed to the right volume with the centroid 1.8 m away and a depth of
- * 1 mm (the engine's path: kernels/overlap.h without OVL_PLACES, as a contact's first pass), a
- * force 20 times too large acting 1.8 m off. The overlap is a slab of the top face: its centroid
- * lies within the faces (to 1e-9 m, far below a lost face's 8e-3 m and far above the slab's
- * 1e-16 m of tilt), its normal along z and its depth 1.1e-6 m, up to what side faces counted
- * inside can add (below).
- */
 /* The engine's cube (builtin:cube, its triangles) at size 0.02 m, of half side LATTICE_H: the
  * particles of examples/cube_lattice.json. */
 #define LATTICE_H (0.40299798850411739 * 0.02)
+/* Single precision's resolution between two of them stacked (64 ulps of the largest coordinate
+ * in A's frame, B's far corners at ~0.0161 m + sqrt(3) h), and the area of a face. */
+#define LATTICE_RES (64 * 1.1920929e-7 * (0.0161 + sqrt(3) * LATTICE_H))
+#define LATTICE_AREA (4 * LATTICE_H * LATTICE_H)
 static pd_mesh *lattice_cube(void)
 {
     const double h = LATTICE_H;
@@ -764,6 +757,17 @@ static pd_mesh *lattice_cube(void)
     return m;
 }
 
+/*
+ * Two 2 cm cubes of a column in a simulated lattice (bench/RESULTS.md, 2026-12-05), 1.1e-6 m
+ * deep, their side faces within rounding of each other's in two directions and turned against
+ * each other by 3e-14 rad: the predicates tied some of the near-coplanar corners and decided
+ * others, and the cusps summed to the right volume with the centroid 1.8 m away and a depth of
+ * 1 mm (the engine's path: kernels/overlap.h without OVL_PLACES, as a contact's first pass), a
+ * force 20 times too large acting 1.8 m off. The overlap is a slab of the top face: its centroid
+ * lies within the faces (to 1e-9 m, far below a lost face's 8e-3 m and far above the slab's
+ * 1e-16 m of tilt), its normal along z and its depth 1.1e-6 m, up to what side faces counted
+ * inside can add (below).
+ */
 TEST(stacked_cubes_turned_by_rounding)
 {
     const double h = LATTICE_H;
@@ -1474,10 +1478,7 @@ TEST(resting_cubes_in_single_precision)
          0.013789254240334441, 0.070290227518440773, 0.056413282163957648, 0.99999983877012666,
          -0.00040153737180585633, -0.00040153138903333186, 5.8702269163270949e-08},
     };
-    /* the resolution: 64 ulps of the largest coordinate in A's frame, B's far corners at
-     * ~0.0161 + sqrt(3) h; the contact's area: A's top face */
-    const double res = 64 * 1.1920929e-7 * (0.0161 + sqrt(3) * LATTICE_H);
-    const double area = 4 * LATTICE_H * LATTICE_H;
+    const double res = LATTICE_RES, area = LATTICE_AREA; /* the contact: A's top face */
     for (int k = 0; k < 4; k++) {
         const double *q = poses[k];
         pd_pose pa = pose(q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
@@ -1516,8 +1517,7 @@ TEST(retries_move_the_resting_cube_both_ways)
                       4.778124548465712e-06, -4.6380200728890486e-06, 3.2073566025303535e-09);
     pd_pose pb = pose(0.097880475223064423, 0.069959953427314758, 0.024188285693526268, 1,
                       -3.9042839489411563e-05, 3.7812613300047815e-05, -6.2132299305517336e-09);
-    const double res = 64 * 1.1920929e-7 * (0.0161 + sqrt(3) * LATTICE_H);
-    const double area = 4 * LATTICE_H * LATTICE_H;
+    const double res = LATTICE_RES, area = LATTICE_AREA;
     pd_contact d = overlap(m, pa, m, pb, 0);
     pd_contact s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
     CHECK(d.hit && s.hit);
