@@ -31,7 +31,7 @@ UNIT_BIN := $(patsubst tests/%.c,$(BUILD)/tests/%,$(UNIT_SRC))
 BENCH_SRC := $(wildcard bench/*.c)
 BENCH_BIN := $(patsubst bench/%.c,$(BUILD)/bench/%,$(BENCH_SRC))
 
-.PHONY: all deps check bench format format-check clean
+.PHONY: all deps check check-build bench format format-check clean
 all: $(BUILD)/polydem
 
 DEB_PACKAGES := build-essential ocl-icd-opencl-dev opencl-c-headers pocl-opencl-icd clinfo \
@@ -67,8 +67,14 @@ $(BUILD)/bench/%: bench/%.c $(wildcard tests/*.h) $(BUILD)/libpolydem.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
 
-check: $(BUILD)/polydem $(UNIT_BIN) $(BENCH_BIN)
+# `make check` builds on every core (JOBS=1 for one at a time), then runs the tests one by one;
+# components add what the tests need to check-build (server/server.mk: polydemd)
+JOBS ?= $(shell nproc 2>/dev/null || echo 1)
+check:
+	@$(MAKE) --no-print-directory -j$(JOBS) check-build
 	@BUILD=$(BUILD) sh tests/run.sh $(UNIT_BIN)
+
+check-build: $(BUILD)/polydem $(UNIT_BIN) $(BENCH_BIN)
 
 bench: $(BUILD)/polydem $(BENCH_BIN)
 	$(BUILD)/bench/overlap

@@ -110,8 +110,9 @@ static int read_frame(hid_t f, const char *name, int *frame, int n, int w, doubl
 }
 
 /* A shape of the file: its mesh at size 1, or NULL for an analytic sphere. */
+#define NAME_MAX_LEN 127 /* a shape's name, read_shape rejects longer (a bound GCC can see) */
 typedef struct {
-    char name[128];
+    char name[NAME_MAX_LEN + 1];
     double *v;
     int *t, nv, nt, sphere;
     double radius; /* circumradius about the body origin at size 1 */
@@ -128,17 +129,17 @@ static int read_shape(hid_t f, int i, shape *s)
     char path[200];
     hsize_t dims[3];
     int rank;
-    snprintf(path, sizeof path, "/shapes/%s/vertices", s->name);
+    snprintf(path, sizeof path, "/shapes/%.*s/vertices", NAME_MAX_LEN, s->name);
     s->v = read_all(f, path, H5T_NATIVE_DOUBLE, sizeof(double), dims, &rank);
     if (!s->v || rank != 2 || dims[1] != 3) return -1;
     s->nv = (int)dims[0];
-    snprintf(path, sizeof path, "/shapes/%s/triangles", s->name);
+    snprintf(path, sizeof path, "/shapes/%.*s/triangles", NAME_MAX_LEN, s->name);
     s->t = read_all(f, path, H5T_NATIVE_INT, sizeof(int), dims, &rank);
     if (!s->t || rank != 2 || dims[1] != 3) return -1;
     s->nt = (int)dims[0];
     /* the kind attribute names analytic spheres (their mesh is for viewing only) */
     char kind[32] = "";
-    snprintf(path, sizeof path, "/shapes/%s", s->name);
+    snprintf(path, sizeof path, "/shapes/%.*s", NAME_MAX_LEN, s->name);
     hid_t a = H5Aopen_by_name(f, path, "kind", H5P_DEFAULT, H5P_DEFAULT);
     if (a >= 0) {
         hid_t ft = H5Aget_type(a);

@@ -580,7 +580,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
 }
 
 /* One pass of Algorithm 1 over the kept triangles, accumulating cusps. */
-PD_FN void ovl_pass(ovl_ctx *c)
+PD_STAGE_FN void ovl_pass(ovl_ctx *c)
 {
     PD_GLOBAL const int *ta = c->in->ta;
     PD_GLOBAL const int *tb = c->in->tb;
@@ -748,7 +748,7 @@ PD_FN int ovl_closes(pd_real open, pd_real mag)
 
 /* Sums the cusps about c->origin (c->flip must be 0; c->degenerate is set by the first pass; with
  * c->one_pass a degenerate pair keeps its first pass alone). */
-PD_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
+PD_STAGE_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
 {
     ovl_pass(c);
     s->vol = c->vol;
@@ -917,7 +917,7 @@ PD_FN void ovl_places_join(ovl_ctx *c)
 }
 
 /* The places of a hit (o filled but for them): o->places, vol_eff, depth_eff, point_eff. */
-PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
+PD_STAGE_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
 {
     o->places = 1;
     o->vol_eff = o->volume;
@@ -986,7 +986,7 @@ PD_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
  * its volume about any origin (in exact arithmetic the result is unchanged). Not for degenerate
  * pairs (their second pass numbers its nodes differently) nor when the nodes overflowed.
  */
-PD_FN void ovl_rescue(ovl_ctx *c, ovl_sums *sm)
+PD_STAGE_FN void ovl_rescue(ovl_ctx *c, ovl_sums *sm)
 {
     if (!OVL_RESCUE || c->degenerate || c->pts_overflow || c->npts < 2) return;
     int places = c->places;
@@ -1212,7 +1212,8 @@ PD_FN void ovl_project_all(PD_GLOBAL const pd_real *v, int n, pd_v3 dd, pd_real 
  * (ovl_sums.closed). one_side 1 (2): a degenerate pair takes its first pass alone, with B
  * displaced by +eps w (-eps w), not the average with the other.
  */
-PD_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out, int one_side, int *sides)
+PD_STAGE_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out, int one_side,
+                                int *sides)
 {
     *pad_out = PD_R(0);
     *sides = 0;

@@ -20,6 +20,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 #define PD_GLOBAL __global
 #define PD_FN static inline
+#define PD_STAGE_FN static inline
 #define PD_SQRT(x) sqrt(x)
 #define PD_FABS(x) fabs(x)
 #define PD_FLOOR(x) floor(x)
@@ -29,8 +30,16 @@
 #if defined(__GNUC__)
 /* the kernels' small helpers must inline on the host as they do on devices */
 #define PD_FN static inline __attribute__((always_inline))
+/*
+ * A stage of the overlap (one pass of the pair loop, one try of ovl_compute) is called from
+ * several places: inlined at each, ovl_compute held 32 copies of the pair loop, overlap_f64.o was
+ * 750 kB and took ~2 min to compile (~45 min under the sanitizers). The host keeps one copy; a
+ * call per pass costs nothing against a pass (bench/RESULTS.md, 2026-12-06 night).
+ */
+#define PD_STAGE_FN static __attribute__((noinline, unused))
 #else
 #define PD_FN static inline
+#define PD_STAGE_FN static inline
 #endif
 #if PD_DOUBLE
 #define PD_SQRT(x) sqrt(x)

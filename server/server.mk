@@ -13,7 +13,7 @@ $(BUILD)/polydemd: $(SERVER_OBJ) $(BUILD)/libpolydem.a
 	$(CC) $(SERVER_OBJ) $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) $(SERVER_LIBS) -o $@
 
 all: $(BUILD)/polydemd
-check: $(BUILD)/polydemd
+check-build: $(BUILD)/polydemd
 
 # clang-format for the server's sources, run by `make format` and `make format-check`
 .PHONY: format-server format-check-server
