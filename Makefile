@@ -67,11 +67,12 @@ $(BUILD)/bench/%: bench/%.c $(wildcard tests/*.h) $(BUILD)/libpolydem.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
 
-# `make check` builds on every core (JOBS=1 for one at a time), then runs the tests one by one;
-# components add what the tests need to check-build (server/server.mk: polydemd)
+# `make check` builds on every core (JOBS=1 for one at a time; a `make -jN` given by the caller
+# is kept), then runs the tests one by one; components add what the tests need to check-build
+# (server/server.mk: polydemd)
 JOBS ?= $(shell nproc 2>/dev/null || echo 1)
 check:
-	@$(MAKE) --no-print-directory -j$(JOBS) check-build
+	@$(MAKE) --no-print-directory $(if $(findstring jobserver,$(MAKEFLAGS)),,-j$(JOBS)) check-build
 	@BUILD=$(BUILD) sh tests/run.sh $(UNIT_BIN)
 
 check-build: $(BUILD)/polydem $(UNIT_BIN) $(BENCH_BIN)
