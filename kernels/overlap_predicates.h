@@ -397,6 +397,22 @@ PD_FN pd_real ovl_plane_tol(const ovl_ctx *c, pd_real nn)
  * gaining kinetic energy (8e-4 J after 0.4 s against 2e-5 J), the columns toppled. That distance
  * is ill-conditioned, and with the edges' ends snapped onto each other's planes only a tie keeps
  * the two kinds of predicate describing one geometry.
+ *
+ * In single precision that floor is far too wide for the contacts it is meant for. A resolution
+ * is ~2e-7 m there for 2 cm particles, and the cubes of a settled lattice are turned against each
+ * other by ~2e-4 rad, so 2 pad / sin(angle) is ~2 mm. The facing side edges of two cubes of a
+ * column shifted sideways by 0.2 mm, a thousand resolutions, tied; the side tests of the same
+ * corners, decided by the coordinates, disagreed with the ties; no try closed; and 5 to 15 of the
+ * 48 contacts of each settled frame were lost (bench/RESULTS.md, 2026-12-07;
+ * tests/physics/test_overlap.c, single_precision_finds_shifted_column_contacts). The single
+ * floor is what can move this determinant instead, never more than the double floor:
+ * - each end displaced by up to the resolution changes it by up to pad |q| (amax(da) + amax(db)),
+ *   q = b0 - a0, taken at an eighth (pad = 64 eps L is some 20 times the transforms' own rounding
+ *   of a coordinate);
+ * - its own rounding, below 32 eps amax(da) amax(db) amax(q) (three products of two terms each,
+ *   summed).
+ * Double precision keeps its floor: the lattice above keeps every contact in double, and its
+ * columns are where the wide floor was needed.
  */
 PD_FN pd_real ovl_ray_tol(const ovl_ctx *c, pd_v3 x, pd_real db2)
 {
@@ -404,9 +420,16 @@ PD_FN pd_real ovl_ray_tol(const ovl_ctx *c, pd_v3 x, pd_real db2)
     return PD_R(2) * c->pad * PD_SQRT(pd_max(v3_dot(x, x), db2 * PD_R(0.0625)));
 }
 
-PD_FN pd_real ovl_edge_tol(const ovl_ctx *c, pd_v3 x, pd_v3 da, pd_v3 db)
+PD_FN pd_real ovl_edge_tol(const ovl_ctx *c, pd_v3 x, pd_v3 da, pd_v3 db, pd_v3 q)
 {
+#if PD_DOUBLE
+    (void)q;
     return PD_R(2) * c->pad * pd_max(v3_norm(x), v3_amax(da) * v3_amax(db));
+#else
+    pd_real la = v3_amax(da), lb = v3_amax(db), lq = v3_amax(q);
+    pd_real floor = PD_R(0.125) * c->pad * lq * (la + lb) + PD_R(32) * PD_EPS * la * lb * lq;
+    return PD_R(2) * pd_max(c->pad * v3_norm(x), pd_min(c->pad * la * lb, floor));
+#endif
 }
 
 /*
@@ -462,8 +485,9 @@ PD_FN int ovl_edge_edge(ovl_ctx *c, int ia0, int ia1, int ib0, int ib1)
     pd_v3 a0 = ovl_va(c, ia0), da = v3_sub(ovl_va(c, ia1), a0);
     pd_v3 b0 = ovl_vb(c, ib0), db = v3_sub(ovl_vb(c, ib1), b0);
     pd_v3 g = v3_cross(db, da);
-    pd_real tol = ovl_edge_tol(c, g, da, db);
-    int s = ovl_sign(ovl_det(da, v3_sub(b0, a0), db), tol);
+    pd_v3 q = v3_sub(b0, a0);
+    pd_real tol = ovl_edge_tol(c, g, da, db, q);
+    int s = ovl_sign(ovl_det(da, q, db), tol);
     return s ? s : ovl_tie(c, g);
 }
 
