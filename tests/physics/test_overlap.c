@@ -1440,6 +1440,34 @@ TEST(clustered_filter_keeps_what_every_vertex_keeps)
 }
 
 /*
+ * Overlaps of lattice cube pairs (poses: A's x y z qw qx qy qz, then B's) in double and in single
+ * precision: single must touch where double does, with the volume within vres resolutions over
+ * the contact's area (A's top face), the depth within 2 resolutions, the normal within 1e-3.
+ */
+static void lattice_single_matches_double(const pd_mesh *m, const double (*poses)[14], int n,
+                                          double vres)
+{
+    const double res = LATTICE_RES, area = LATTICE_AREA;
+    for (int k = 0; k < n; k++) {
+        const double *q = poses[k];
+        pd_pose pa = pose(q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
+        pd_pose pb = pose(q[7], q[8], q[9], q[10], q[11], q[12], q[13]);
+        pd_contact d = overlap(m, pa, m, pb, 0);
+        pd_contact s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
+        CHECK(d.hit && d.volume > 1e-10);
+        CHECK(s.hit);
+        if (!d.hit || !s.hit) continue;
+        CHECK_NEAR(d.volume, s.volume, vres * res * area);
+        CHECK_NEAR(d.depth, s.depth, 2 * res);
+        CHECK_VEC(d.normal[0], d.normal[1], d.normal[2], s.normal, 1e-3);
+        printf("  pair %d: V %.4e m^3, single %+.1e relative (tolerance %.1e); depth %.3e m, "
+               "single %+.1e m\n",
+               k, d.volume, s.volume / d.volume - 1, vres * res * area / d.volume, d.depth,
+               s.depth - d.depth);
+    }
+}
+
+/*
  * Cubes resting on each other in the columns of a settled lattice (examples/cube_lattice.json
  * after 0.4 s: the poses of its last frame), 2.5-8.7 um deep, the upper cube's bottom face tilted
  * against the lower's top by ~2e-4 rad, so that a corner of each lies within single precision's
@@ -1478,24 +1506,7 @@ TEST(resting_cubes_in_single_precision)
          0.013789254240334441, 0.070290227518440773, 0.056413282163957648, 0.99999983877012666,
          -0.00040153737180585633, -0.00040153138903333186, 5.8702269163270949e-08},
     };
-    const double res = LATTICE_RES, area = LATTICE_AREA; /* the contact: A's top face */
-    for (int k = 0; k < 4; k++) {
-        const double *q = poses[k];
-        pd_pose pa = pose(q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
-        pd_pose pb = pose(q[7], q[8], q[9], q[10], q[11], q[12], q[13]);
-        pd_contact d = overlap(m, pa, m, pb, 0);
-        pd_contact s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
-        CHECK(d.hit && d.volume > 2e-10);
-        CHECK(s.hit);
-        if (!d.hit || !s.hit) continue;
-        CHECK_NEAR(d.volume, s.volume, 2 * res * area);
-        CHECK_NEAR(d.depth, s.depth, 2 * res);
-        CHECK_VEC(d.normal[0], d.normal[1], d.normal[2], s.normal, 1e-3);
-        printf("  pair %d: V %.4e m^3, single %+.1e relative (tolerance %.1e); depth %.3e m, "
-               "single %+.1e m\n",
-               k, d.volume, s.volume / d.volume - 1, 2 * res * area / d.volume, d.depth,
-               s.depth - d.depth);
-    }
+    lattice_single_matches_double(m, poses, 4, 2);
     pd_mesh_destroy(m);
 }
 
@@ -1529,24 +1540,7 @@ TEST(single_precision_finds_shifted_column_contacts)
          0.098099059193029414, 0.01390093257849186, 0.040298763535803507, 0.99999943980054973,
          -0.00074840230563287622, -0.00074852693491523996, 5.8870487678323357e-08},
     };
-    const double res = LATTICE_RES, area = LATTICE_AREA;
-    for (int k = 0; k < 3; k++) {
-        const double *q = poses[k];
-        pd_pose pa = pose(q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
-        pd_pose pb = pose(q[7], q[8], q[9], q[10], q[11], q[12], q[13]);
-        pd_contact d = overlap(m, pa, m, pb, 0);
-        pd_contact s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
-        CHECK(d.hit && d.volume > 2e-10);
-        CHECK(s.hit);
-        if (!d.hit || !s.hit) continue;
-        CHECK_NEAR(d.volume, s.volume, 2 * res * area);
-        CHECK_NEAR(d.depth, s.depth, 2 * res);
-        CHECK_VEC(d.normal[0], d.normal[1], d.normal[2], s.normal, 1e-3);
-        printf("  pair %d: V %.4e m^3, single %+.1e relative (tolerance %.1e); depth %.3e m, "
-               "single %+.1e m\n",
-               k, d.volume, s.volume / d.volume - 1, 2 * res * area / d.volume, d.depth,
-               s.depth - d.depth);
-    }
+    lattice_single_matches_double(m, poses, 3, 2);
     pd_mesh_destroy(m);
 }
 
@@ -1578,21 +1572,7 @@ TEST(retries_move_the_resting_cube_both_ways)
          0.041955843480750148, 0.041959117255004952, 0.024174735271054047, 0.99999978241666754,
          -0.00024569563495456596, 8.916303962740795e-05, -0.00060568162023952158},
     };
-    const double res = LATTICE_RES, area = LATTICE_AREA;
-    for (int k = 0; k < 2; k++) {
-        const double *q = poses[k];
-        pd_pose pa = pose(q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
-        pd_pose pb = pose(q[7], q[8], q[9], q[10], q[11], q[12], q[13]);
-        pd_contact d = overlap(m, pa, m, pb, 0);
-        pd_contact s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
-        CHECK(d.hit && s.hit);
-        if (!d.hit || !s.hit) continue;
-        CHECK_NEAR(d.volume, s.volume, res * area);
-        CHECK_NEAR(d.depth, s.depth, 2 * res);
-        CHECK_VEC(d.normal[0], d.normal[1], d.normal[2], s.normal, 1e-3);
-        printf("  pair %d: V %.4e m^3, single %+.1e relative (tolerance %.1e)\n", k, d.volume,
-               s.volume / d.volume - 1, res * area / d.volume);
-    }
+    lattice_single_matches_double(m, poses, 2, 1);
     pd_mesh_destroy(m);
 }
 
