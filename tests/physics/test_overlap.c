@@ -1545,6 +1545,37 @@ TEST(single_precision_finds_shifted_column_contacts)
 }
 
 /*
+ * Particles 6 and 22 of the lattice settling in single precision (examples/cube_lattice.json with
+ * "precision": "single", step 12 444): B rests on A, their front faces coplanar to a few
+ * resolutions. A's diagonal edge in that face crosses B's front face plane at a place that is the
+ * ratio of two side values within the tie band: single precision put the crossing node 1.8 mm
+ * below the contact. The volume was right (+1e-4) but the depth came out 1.86e-3 m for 1.03e-5 m,
+ * a one-step force spike in the run. The nodes are now kept within the box where both solids'
+ * kept parts meet (ovl_node), which holds every node of A n B. Tolerances as in
+ * resting_cubes_in_single_precision; the effective depth (OVL_PLACES), which the engine's force
+ * law takes, too.
+ */
+TEST(single_precision_depth_of_a_grazing_crossing)
+{
+    pd_mesh *m = lattice_cube();
+    CHECK(m != NULL);
+    if (!m) return;
+    static const double poses[1][14] = {
+        {0.070090115070343018, 0.041982084512710571, 0.0080552734434604645, 0.99999731779098511,
+         -5.980365676805377e-05, -1.6903089999686927e-05, 0.0023495466448366642,
+         0.070100806653499603, 0.041986037045717239, 0.024171547964215279, 0.99999755620956421,
+         -8.2688769907690585e-05, -3.6047480534762144e-05, 0.0022269641049206257},
+    };
+    lattice_single_matches_double(m, poses, 1, 2);
+    const double *q = poses[0];
+    pd_pose pa = pose(q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
+    pd_pose pb = pose(q[7], q[8], q[9], q[10], q[11], q[12], q[13]);
+    pd_contact d = overlap(m, pa, m, pb, 0), s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
+    CHECK_NEAR(d.effective_depth, s.effective_depth, 2 * LATTICE_RES);
+    pd_mesh_destroy(m);
+}
+
+/*
  * Two cubes of a lattice settling in single precision (particles 11 and 27 at step 5 560 of
  * examples/cube_lattice.json run with "precision": "single"), 1.0e-10 m^3 of overlap, a
  * resolution (res, 1.8e-7 m) or so deep at its thin end. Single precision's first try disagreed
@@ -1613,6 +1644,7 @@ int main(void)
     RUN(clustered_filter_keeps_what_every_vertex_keeps);
     RUN(resting_cubes_in_single_precision);
     RUN(single_precision_finds_shifted_column_contacts);
+    RUN(single_precision_depth_of_a_grazing_crossing);
     RUN(retries_move_the_resting_cube_both_ways);
     return TEST_DONE();
 }
