@@ -25,8 +25,9 @@
  * the sum over the places of sqrt(V_k d_k)).
  *
  * --list prints each touching pair: particles, volume (m^3), depth (m), area (m^2), rho, the
- * single-precision volume (0: missed), places, the effective depth (m), and the normal and the
- * centroid in the first particle's frame (its centroid at the origin).
+ * single-precision volume (0: missed), places, the effective depth (m), the normal and the
+ * centroid in the first particle's frame (its centroid at the origin), and single precision's
+ * effective depth (m; 0: missed), plain and summed about its contact point.
  *
  * usage: build/bench/contacts RESULT.h5 [--frame K] [--reps N] [--list]   (K: default the last)
  */
@@ -388,6 +389,11 @@ int main(int argc, char **argv)
         fprintf(stderr, "contacts: out of memory\n");
         return 1;
     }
+    ovl_result *s32o = calloc((size_t)np, sizeof *s32o); /* about the contact point (hit 0: none) */
+    if (!s32o) {
+        fprintf(stderr, "contacts: out of memory\n");
+        return 1;
+    }
     for (int p = 0; p < np; p++) {
         ovl_result s32;
         if (!(su[p].flags & OVL_ORIGIN)) continue;
@@ -396,6 +402,7 @@ int main(int argc, char **argv)
             return 1;
         }
         su[p].flags &= ~OVL_ORIGIN;
+        s32o[p] = s32;
         if (!s32.hit) continue;
         hint_found++;
         if (out[p].hit) herr[nherr++] = fabs(s32.volume - out[p].volume) / out[p].volume;
@@ -404,6 +411,7 @@ int main(int argc, char **argv)
 
     /* depth against the overlap's thickness, and single precision against double */
     int nr = 0, nbig = 0, nboth = 0, nmiss = 0, nextra = 0, nplaces[5] = {0}, nbig_multi = 0;
+    int ndeep = 0, ndeep_o = 0; /* single's effective depth above twice double's */
     double force = 0, force_big = 0, force_sep = 0, multi_merged = 0, multi_sep = 0;
     for (int p = 0; p < np; p++) {
         const ovl_result s32 = s32a[p]; /* the plain single-precision pass */
@@ -416,11 +424,17 @@ int main(int argc, char **argv)
         if (list)
             printf("pair %d %d: volume %.6g m^3, depth %.6g m, area %.6g m^2, rho %.4g, single "
                    "volume %.6g m^3, places %d, effective depth %.6g m, normal (%.6g, %.6g, %.6g) "
-                   "and centroid (%.6g, %.6g, %.6g) m in the first's frame%s\n",
+                   "and centroid (%.6g, %.6g, %.6g) m in the first's frame; single effective "
+                   "depth %.6g m, summed about its contact point %.6g m%s\n",
                    pair[2 * p], pair[2 * p + 1], o->volume, o->depth, o->area, r,
                    s32.hit ? s32.volume : 0, pl[p].places, pl[p].depth_eff, o->normal.x,
                    o->normal.y, o->normal.z, o->centroid.x, o->centroid.y, o->centroid.z,
+                   s32.hit ? s32.depth_eff : 0, s32o[p].hit ? s32o[p].depth_eff : 0,
                    o->degenerate ? ", degenerate" : "");
+        /* a force spike's signature: single's depth far beyond double's (a stray node, a turned
+         * normal), the volume being right */
+        ndeep += s32.hit && s32.depth_eff > 2 * pl[p].depth_eff;
+        ndeep_o += s32o[p].hit && s32o[p].depth_eff > 2 * pl[p].depth_eff;
         rho_eff[nr] = pl[p].depth_eff * o->area / o->volume;
         rho[nr++] = r;
         force += fv;
@@ -499,6 +513,9 @@ int main(int argc, char **argv)
            quantile(verr, nboth, 0.5), quantile(verr, nboth, 0.9), quantile(verr, nboth, 0.99),
            nboth ? verr[nboth - 1] : 0, quantile(nerr, nboth, 0.5), quantile(nerr, nboth, 0.99),
            nboth ? nerr[nboth - 1] : 0);
+    printf("single precision's effective depth above twice double's (a stray node or a turned "
+           "normal): %d of the %d touching pairs, %d summed about their contact point\n",
+           ndeep, nh, ndeep_o);
 
     for (int p = 0; p < np; p++)
         ovl_setup_free(&su[p]);
@@ -523,6 +540,7 @@ int main(int argc, char **argv)
     free(missed);
     free(herr);
     free(s32a);
+    free(s32o);
     free(x);
     free(q);
     free(pshape);
