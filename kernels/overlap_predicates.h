@@ -427,8 +427,8 @@ PD_FN pd_real ovl_edge_tol(const ovl_ctx *c, pd_v3 x, pd_v3 da, pd_v3 db, pd_v3 
     return PD_R(2) * c->pad * pd_max(v3_norm(x), v3_amax(da) * v3_amax(db));
 #else
     pd_real la = v3_amax(da), lb = v3_amax(db), lq = v3_amax(q);
-    pd_real floor = PD_R(0.125) * c->pad * lq * (la + lb) + PD_R(32) * PD_EPS * la * lb * lq;
-    return PD_R(2) * pd_max(c->pad * v3_norm(x), pd_min(c->pad * la * lb, floor));
+    pd_real moved = PD_R(0.125) * c->pad * lq * (la + lb) + PD_R(32) * PD_EPS * la * lb * lq;
+    return PD_R(2) * pd_max(c->pad * v3_norm(x), pd_min(c->pad * la * lb, moved));
 #endif
 }
 

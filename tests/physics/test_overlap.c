@@ -1441,13 +1441,17 @@ TEST(clustered_filter_keeps_what_every_vertex_keeps)
 
 /*
  * Overlaps of lattice cube pairs (poses: A's x y z qw qx qy qz, then B's) in double and in single
- * precision: single must touch where double does, with the volume within vres resolutions over
- * the contact's area (A's top face), the depth and the effective depth (OVL_PLACES, which the
- * engine's force law takes) within 2 resolutions, the normal within 1e-3.
+ * precision: double must touch by more than vmin (m^3), single where double does, with the volume
+ * within vres resolutions over the contact's area (A's top face), the depth and the effective
+ * depth (OVL_PLACES, which the engine's force law takes) within 2 resolutions, the normal within
+ * 1e-3.
  */
-static void lattice_single_matches_double(const pd_mesh *m, const double (*poses)[14], int n,
+static void lattice_single_matches_double(const double (*poses)[14], int n, double vmin,
                                           double vres)
 {
+    pd_mesh *m = lattice_cube();
+    CHECK(m != NULL);
+    if (!m) return;
     const double res = LATTICE_RES, area = LATTICE_AREA;
     for (int k = 0; k < n; k++) {
         const double *q = poses[k];
@@ -1455,7 +1459,7 @@ static void lattice_single_matches_double(const pd_mesh *m, const double (*poses
         pd_pose pb = pose(q[7], q[8], q[9], q[10], q[11], q[12], q[13]);
         pd_contact d = overlap(m, pa, m, pb, 0);
         pd_contact s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
-        CHECK(d.hit && d.volume > 1e-10);
+        CHECK(d.hit && d.volume > vmin);
         CHECK(s.hit);
         if (!d.hit || !s.hit) continue;
         CHECK_NEAR(d.volume, s.volume, vres * res * area);
@@ -1467,6 +1471,7 @@ static void lattice_single_matches_double(const pd_mesh *m, const double (*poses
                k, d.volume, s.volume / d.volume - 1, vres * res * area / d.volume, d.depth,
                s.depth - d.depth);
     }
+    pd_mesh_destroy(m);
 }
 
 /*
@@ -1483,9 +1488,6 @@ static void lattice_single_matches_double(const pd_mesh *m, const double (*poses
  */
 TEST(resting_cubes_in_single_precision)
 {
-    pd_mesh *m = lattice_cube();
-    CHECK(m != NULL);
-    if (!m) return;
     static const double poses[4][14] = {
         /* lattice particles 1 and 17: the +w pass closes */
         {0.041993783054748414, 0.014073263395621692, 0.0080579626850091467, 0.99999999416934537,
@@ -1508,8 +1510,7 @@ TEST(resting_cubes_in_single_precision)
          0.013789254240334441, 0.070290227518440773, 0.056413282163957648, 0.99999983877012666,
          -0.00040153737180585633, -0.00040153138903333186, 5.8702269163270949e-08},
     };
-    lattice_single_matches_double(m, poses, 4, 2);
-    pd_mesh_destroy(m);
+    lattice_single_matches_double(poses, 4, 2e-10, 2);
 }
 
 /*
@@ -1525,9 +1526,6 @@ TEST(resting_cubes_in_single_precision)
  */
 TEST(single_precision_finds_shifted_column_contacts)
 {
-    pd_mesh *m = lattice_cube();
-    CHECK(m != NULL);
-    if (!m) return;
     static const double poses[3][14] = {
         {0.014129860278901785, 0.069949620861402884, 0.0080588127931061626, 0.99999997573839638,
          -0.00015576234501901002, -0.0001557603869355707, 2.4565683352783338e-08,
@@ -1542,8 +1540,7 @@ TEST(single_precision_finds_shifted_column_contacts)
          0.098099059193029414, 0.01390093257849186, 0.040298763535803507, 0.99999943980054973,
          -0.00074840230563287622, -0.00074852693491523996, 5.8870487678323357e-08},
     };
-    lattice_single_matches_double(m, poses, 3, 2);
-    pd_mesh_destroy(m);
+    lattice_single_matches_double(poses, 3, 2e-10, 2);
 }
 
 /*
@@ -1558,17 +1555,13 @@ TEST(single_precision_finds_shifted_column_contacts)
  */
 TEST(single_precision_depth_of_a_grazing_crossing)
 {
-    pd_mesh *m = lattice_cube();
-    CHECK(m != NULL);
-    if (!m) return;
     static const double poses[1][14] = {
         {0.070090115070343018, 0.041982084512710571, 0.0080552734434604645, 0.99999731779098511,
          -5.980365676805377e-05, -1.6903089999686927e-05, 0.0023495466448366642,
          0.070100806653499603, 0.041986037045717239, 0.024171547964215279, 0.99999755620956421,
          -8.2688769907690585e-05, -3.6047480534762144e-05, 0.0022269641049206257},
     };
-    lattice_single_matches_double(m, poses, 1, 2);
-    pd_mesh_destroy(m);
+    lattice_single_matches_double(poses, 1, 2e-10, 2);
 }
 
 /*
@@ -1586,9 +1579,6 @@ TEST(single_precision_depth_of_a_grazing_crossing)
  */
 TEST(retries_move_the_resting_cube_both_ways)
 {
-    pd_mesh *m = lattice_cube();
-    CHECK(m != NULL);
-    if (!m) return;
     static const double poses[2][14] = {
         {0.097880959510803223, 0.069960452616214752, 0.0080686742439866066, 1,
          4.778124548465712e-06, -4.6380200728890486e-06, 3.2073566025303535e-09,
@@ -1599,8 +1589,7 @@ TEST(retries_move_the_resting_cube_both_ways)
          0.041955843480750148, 0.041959117255004952, 0.024174735271054047, 0.99999978241666754,
          -0.00024569563495456596, 8.916303962740795e-05, -0.00060568162023952158},
     };
-    lattice_single_matches_double(m, poses, 2, 1);
-    pd_mesh_destroy(m);
+    lattice_single_matches_double(poses, 2, 1e-10, 1);
 }
 
 int main(void)
