@@ -500,6 +500,49 @@ PD_FN pd_real ovl_cross_err(const ovl_ctx *c, pd_v3 a0, pd_v3 a1, pd_real s0, pd
     return ds > PD_R(0) ? c->pad + PD_R(2) * len * tol / ds : PD_REAL_MAX;
 }
 
+/* Narrows [*t0, *t1] to where a + t d lies within [lo, hi] on one axis; 0 when it never can. */
+PD_FN int ovl_slab(pd_real a, pd_real d, pd_real lo, pd_real hi, pd_real *t0, pd_real *t1)
+{
+    if (d == PD_R(0)) return a >= lo && a <= hi;
+    pd_real u = (lo - a) / d, v = (hi - a) / d;
+    *t0 = pd_max(*t0, pd_min(u, v));
+    *t1 = pd_min(*t1, pd_max(u, v));
+    return 1;
+}
+
+/*
+ * Whether a crossing of canonical edge a->b, computed at p, can be a node of A n B: p lies in the
+ * box where the kept parts of both solids meet (c->box_lo, c->box_hi, padded by the cull margin),
+ * which holds every node of A n B, or the edge enters that box somewhere. An edge that never does
+ * crosses nothing of the other solid, and its crossing is dropped.
+ *
+ * Such crossings come only from predicates that describe no one geometry. An edge lying in a
+ * plane of the other solid to within the resolution straddles it when one end is decided by its
+ * coordinates and the other by the tie-breaking, and its crossing point is then a ratio of side
+ * values inside the tie band: anywhere along the edge. Whether the edge's line passes through
+ * the other's triangle is decided by the edge-edge predicates, which are all ties for coplanar
+ * lines however far apart they lie in the plane. In a single-precision lattice of 2 cm cubes,
+ * the bottom edges of the lower cube and the top edges of the upper one crossed each other's side
+ * faces so, coplanar to 3.6e-7 m: four cusps 16 mm from a contact 1e-5 m deep, whose faces'
+ * polygons were open on both solids alike (so the sum of both solids' area vectors still
+ * vanished) and turned the normal by 14 degrees; the depth along it was 3.9e-3 m, a one-step
+ * force spike (tests/physics/test_overlap.c, single_precision_normal_of_coplanar_columns;
+ * bench/RESULTS.md, 2026-12-07).
+ *
+ * A crossing outside the box on an edge that enters it is kept where it was computed (ovl_node
+ * records its node within the box): moving it along the edge into the box was tried, and opened
+ * other faces' polygons (a resting pair of that lattice got a normal turned by 40 degrees).
+ */
+PD_FN int ovl_crossing_in_box(const ovl_ctx *c, pd_v3 p, pd_v3 a, pd_v3 b)
+{
+    if (ovl_in_box(c, p)) return 1;
+    pd_v3 d = v3_sub(b, a);
+    pd_real t0 = PD_R(0), t1 = PD_R(1);
+    return ovl_slab(a.x, d.x, c->box_lo.x, c->box_hi.x, &t0, &t1) &&
+           ovl_slab(a.y, d.y, c->box_lo.y, c->box_hi.y, &t0, &t1) &&
+           ovl_slab(a.z, d.z, c->box_lo.z, c->box_hi.z, &t0, &t1) && t0 <= t1;
+}
+
 /* The corner alone on its side of a plane, given three sides (+-1); 3 when all are equal. */
 PD_FN int ovl_lone(const int sd[3])
 {
@@ -559,7 +602,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
             in = s0 != 0 && s0 == ovl_edge_edge_dir(c, i, j, U->id[1], U->id[2]) &&
                  s0 == ovl_edge_edge_dir(c, i, j, U->id[2], U->id[0]);
         }
-        if (in != 1) continue;
+        if (in != 1 || !ovl_crossing_in_box(c, p, T->p[k], T->p[k1])) continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
         c->xa[T->slot] ^= 1 << k; /* for ovl_resolve */
@@ -583,7 +626,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
             in = s0 != 0 && s0 == ovl_edge_edge_dir(c, T->id[1], T->id[2], i, j) &&
                  s0 == ovl_edge_edge_dir(c, T->id[2], T->id[0], i, j);
         }
-        if (in != 1) continue;
+        if (in != 1 || !ovl_crossing_in_box(c, p, U->p[k], U->p[k1])) continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
         c->xb[U->slot] ^= 1 << k;
