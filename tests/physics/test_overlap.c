@@ -1439,6 +1439,23 @@ TEST(clustered_filter_keeps_what_every_vertex_keeps)
     pd_mesh_destroy(rock);
 }
 
+/* A lattice cube pair (q: A's x y z qw qx qy qz, then B's) in double (*d) and single (*s). */
+static void lattice_pair(const pd_mesh *m, const double *q, pd_contact *d, pd_contact *s)
+{
+    pd_pose pa = pose(q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
+    pd_pose pb = pose(q[7], q[8], q[9], q[10], q[11], q[12], q[13]);
+    *d = overlap(m, pa, m, pb, 0);
+    *s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
+}
+
+/* The angle between unit vectors u and v (rad), from both products: exact near 0 as well. */
+static double angle_between(const double *u, const double *v)
+{
+    double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2],
+           cz = u[0] * v[1] - u[1] * v[0];
+    return atan2(sqrt(cx * cx + cy * cy + cz * cz), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
+}
+
 /*
  * Overlaps of lattice cube pairs (poses: A's x y z qw qx qy qz, then B's) in double and in single
  * precision: double must touch by more than vmin (m^3), single where double does, with the volume
@@ -1454,11 +1471,8 @@ static void lattice_single_matches_double(const double (*poses)[14], int n, doub
     if (!m) return;
     const double res = LATTICE_RES, area = LATTICE_AREA;
     for (int k = 0; k < n; k++) {
-        const double *q = poses[k];
-        pd_pose pa = pose(q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
-        pd_pose pb = pose(q[7], q[8], q[9], q[10], q[11], q[12], q[13]);
-        pd_contact d = overlap(m, pa, m, pb, 0);
-        pd_contact s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
+        pd_contact d, s;
+        lattice_pair(m, poses[k], &d, &s);
         CHECK(d.hit && d.volume > vmin);
         CHECK(s.hit);
         if (!d.hit || !s.hit) continue;
@@ -1587,20 +1601,13 @@ static void lattice_single_within_strips(const double (*poses)[14], int n)
     if (!m) return;
     const double res = LATTICE_RES, w = 2 * LATTICE_H;
     for (int k = 0; k < n; k++) {
-        const double *q = poses[k];
-        pd_pose pa = pose(q[0], q[1], q[2], q[3], q[4], q[5], q[6]);
-        pd_pose pb = pose(q[7], q[8], q[9], q[10], q[11], q[12], q[13]);
-        pd_contact d = overlap(m, pa, m, pb, 0);
-        pd_contact s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
+        pd_contact d, s;
+        lattice_pair(m, poses[k], &d, &s);
         CHECK(d.hit && s.hit);
         if (!d.hit || !s.hit) continue;
         CHECK_NEAR(d.volume, s.volume, 2 * res * LATTICE_AREA);
         double turn = fmax(1e-3, 2 * w * d.depth * d.depth / d.volume);
-        const double *u = d.normal, *v = s.normal; /* the angle, from both products */
-        double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2],
-               cz = u[0] * v[1] - u[1] * v[0];
-        double angle =
-            atan2(sqrt(cx * cx + cy * cy + cz * cz), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
+        double angle = angle_between(d.normal, s.normal);
         CHECK(angle <= turn);
         CHECK_NEAR(d.effective_depth, s.effective_depth, sqrt(2) * w * angle + 2 * res);
         printf("  pair %d: V %.4e m^3, single %+.1e relative; normal %.1e rad apart (at most "
@@ -1745,11 +1752,7 @@ TEST(single_precision_moves_that_disagree)
         for (int k = 0; k < 2 && o.hit; k++) {
             const ovl_result *r = k ? &o : &s;
             CHECK_NEAR(d.volume, r->volume, 2 * res * LATTICE_AREA);
-            const double *u = d.normal, *v = r->normal;
-            double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2],
-                   cz = u[0] * v[1] - u[1] * v[0];
-            double angle =
-                atan2(sqrt(cx * cx + cy * cy + cz * cz), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
+            double angle = angle_between(d.normal, r->normal);
             CHECK_NEAR(d.depth_eff, r->depth_eff, sqrt(2) * w * angle + 2 * res);
             printf("  %s: V %.4e m^3, single %+.1e relative; normal %.1e rad apart; depth "
                    "%.3e m, single %.3e m\n",
