@@ -56,7 +56,7 @@ PD_FN void ovl_cusp(ovl_ctx *c, pd_v3 p, pd_v3 t, pd_v3 n, pd_v3 nu, int on_b)
     c->area_abs += PD_FABS(area);
 #if !PD_DOUBLE
     /* ovl_faces_close: this cusp's share of n (t . p) on its face, kept apart by the face's
-     * normal */
+     * normal (single precision only: see there) */
     pd_real nv[3] = {nu.x, nu.y, nu.z}, qv[3] = {n.x * tp, n.y * tp, n.z * tp};
     for (int r = 0; r < 3; r++)
         for (int q = 0; q < 3; q++)
@@ -539,8 +539,9 @@ PD_FN int ovl_slab(pd_real a, pd_real d, pd_real lo, pd_real hi, pd_real *t0, pd
  * bench/RESULTS.md, 2026-12-07).
  *
  * A crossing outside the box on an edge that enters it is kept where it was computed (ovl_node
- * records its node within the box): moving it along the edge into the box was tried, and opened
- * other faces' polygons (a resting pair of that lattice got a normal turned by 40 degrees).
+ * records its node within the box), unless the edge-edge predicates placed it (ovl_crossing_onto):
+ * moving every such crossing along its edge into the box was tried, and opened other faces'
+ * polygons (a resting pair of that lattice got a normal turned by 40 degrees).
  */
 PD_FN int ovl_crossing_in_box(const ovl_ctx *c, pd_v3 p, pd_v3 a, pd_v3 b)
 {
@@ -563,7 +564,7 @@ PD_FN int ovl_crossing_in_box(const ovl_ctx *c, pd_v3 p, pd_v3 a, pd_v3 b)
  * within the resolution of their bottom edges, crossed them 4.6 mm below the contact, where the
  * line of the faces' intersection lies millimetres away: the pass's side polygons were open and
  * a resting contact's normal turned by 11 degrees (tests/physics/test_overlap.c,
- * single_precision_crossings_near_parallel_faces; bench/RESULTS.md, 2026-12-07 (later)).
+ * single_precision_crossings_near_parallel_faces; bench/RESULTS.md, 2026-12-07 (later still)).
  */
 PD_FN pd_v3 ovl_crossing_onto(const ovl_ctx *c, pd_v3 p, pd_v3 a, pd_v3 b, pd_real lam, pd_v3 lo,
                               pd_v3 hi)
@@ -873,8 +874,8 @@ PD_FN int ovl_closes(pd_real open, pd_real mag)
  * along the edge: the area vectors still cancel, but their difference, eq. 4.19's normal, carried
  * the open polygons' area, and the normal turned by 7 to 11 degrees in a lattice of cubes
  * landing (tests/physics/test_overlap.c, single_precision_faces_open_alike; bench/RESULTS.md,
- * 2026-12-07 (later)). Such passes measured 2 400 to 25 000 resolutions, closed ones up to 35:
- * the bound is 256, plus the sums' rounding. ovl_compute takes a first try whose other pass
+ * 2026-12-07 (later still)). Such passes measured 2 400 to 25 000 resolutions, closed ones up to
+ * 35: the bound is 256, plus the sums' rounding. ovl_compute takes a first try whose other pass
  * closes face by face from that pass alone. It is no requirement otherwise: resting contacts a
  * few resolutions deep can have open faces in every pass of every try, and requiring closed ones
  * lost two of them. Double precision's tie band is 1e-16 of the configuration, too narrow for a
@@ -1365,8 +1366,9 @@ PD_FN void ovl_project_all(PD_GLOBAL const pd_real *v, int n, pd_v3 dd, pd_real 
  * One evaluation of the overlap (ovl_compute). Returns 0 when the predicates were found to
  * disagree about the geometry (the overlap's surface does not close), 1 otherwise; *pad: the
  * resolution it worked at; *sides: which of a degenerate pair's passes closed on their own
- * (ovl_sums.closed). one_side 1 (2): a degenerate pair takes its first pass alone, with B
- * displaced by +eps w (-eps w), not the average with the other.
+ * (ovl_sums.closed); *faces: which of them closed face by face (ovl_sums.faces, both passes
+ * taken). one_side 1 (2): a degenerate pair takes its first pass alone, with B displaced by
+ * +eps w (-eps w), not the average with the other.
  */
 PD_STAGE_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out, int one_side,
                                 int *sides, int *faces)
@@ -1716,10 +1718,12 @@ refilter:
      * in a single-precision lattice of cubes the -w pass of a resting contact summed 4.1e-10 m^3
      * against the +w pass's 1.3e-10 (double: 1.3e-10), and the mean was twice the volume with a
      * 16-degree normal (tests/physics/test_overlap.c, single_precision_passes_that_disagree,
-     * which ovl_faces_close also catches). Eight variants of that lattice run in single
-     * precision without this check: one was thrown apart (kinetic energy 0.06 J against 1e-6 J)
-     * and two had steps with a depth of a whole side; with it, none (bench/RESULTS.md,
-     * 2026-12-07 (later)). ovl_compute takes such a pair again on B moved.
+     * which ovl_faces_close also catches). Of eight variants of that lattice run in single
+     * precision by a build without this check, one was thrown apart (kinetic energy 0.06 J
+     * against 1e-6 J) and two had steps with a depth of a whole side; with it, none. In double
+     * precision it mends the last wrong one of bench/degenerate's 48 000 near-coplanar box pairs
+     * (bench/RESULTS.md, 2026-12-07 (later still)). ovl_compute takes such a pair again on B
+     * moved.
      */
     if (sm.vdiff > PD_R(4) * c->pad * sm.surf + PD_R(1000) * PD_EPS * sm.vol_abs) closed = 0;
     *sides = degenerate ? sm.closed : 0;

@@ -293,10 +293,12 @@ typedef struct ovl_ctx {
     pd_real area_abs; /* sum of |area| over every cusp: the scale of area_a - area_b's terms */
     pd_v3 area_a;     /* sum of area * outward normal over A's faces inside B */
     pd_v3 area_b;     /* the same over B's faces inside A */
-    /* single precision: each solid's sum of nu (x) n (t . p) over its cusps, row-major, and the
-     * sum of |t . p| (ovl_faces_close) */
+#if !PD_DOUBLE
+    /* each solid's sum of nu (x) n (t . p) over its cusps, row-major, and the sum of |t . p|
+     * (ovl_faces_close) */
     pd_real gap[2][9];
     pd_real gap_abs;
+#endif
     /* depth mode: project nodes on n instead of storing them */
     int depth_mode;
     pd_v3 n;
