@@ -581,6 +581,20 @@ PD_FN pd_v3 ovl_crossing_onto(const ovl_ctx *c, pd_v3 p, pd_v3 a, pd_v3 b, pd_re
     return v3_add(a, v3_scale(d, pd_min(pd_max(lam, t0), t1)));
 }
 
+/*
+ * The rare path of a crossing p of edge a->b (lo: the canonical end) that lies outside the box of
+ * A n B: whether it is kept (ovl_crossing_in_box), and if the edge-edge predicates placed it
+ * (tied), where (ovl_crossing_onto, into the other triangle's box lo_t, hi_t). A stage of its
+ * own on the host, so the pair loop's common path is laid out as without it.
+ */
+PD_STAGE_FN int ovl_crossing_outside(const ovl_ctx *c, pd_v3 *p, pd_v3 a, pd_v3 b, pd_real lam,
+                                     int tied, pd_v3 lo_t, pd_v3 hi_t)
+{
+    if (!ovl_crossing_in_box(c, *p, a, b)) return 0;
+    if (tied) *p = ovl_crossing_onto(c, *p, a, b, lam, lo_t, hi_t);
+    return 1;
+}
+
 /* The corner alone on its side of a plane, given three sides (+-1); 3 when all are equal. */
 PD_FN int ovl_lone(const int sd[3])
 {
@@ -642,12 +656,11 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
                  s0 == ovl_edge_edge_dir(c, i, j, U->id[2], U->id[0]);
         }
         if (in != 1) continue;
-        if (!ovl_in_box(c, p)) { /* rare: an edge nearly in the other's plane */
-            if (!ovl_crossing_in_box(c, p, T->p[k], T->p[k1])) continue;
-            if (tied)
-                p = ovl_crossing_onto(c, p, T->p[lo], T->p[k + k1 - lo],
-                                      ovl_cross_lam(qa[lo], qa[k + k1 - lo]), U->lo, U->hi);
-        }
+        /* rare: an edge nearly in the other's plane */
+        if (!ovl_in_box(c, p) &&
+            !ovl_crossing_outside(c, &p, T->p[lo], T->p[k + k1 - lo],
+                                  ovl_cross_lam(qa[lo], qa[k + k1 - lo]), tied, U->lo, U->hi))
+            continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
         c->xa[T->slot] ^= 1 << k; /* for ovl_resolve */
@@ -673,12 +686,11 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
                  s0 == ovl_edge_edge_dir(c, T->id[2], T->id[0], i, j);
         }
         if (in != 1) continue;
-        if (!ovl_in_box(c, p)) { /* rare: an edge nearly in the other's plane */
-            if (!ovl_crossing_in_box(c, p, U->p[k], U->p[k1])) continue;
-            if (tied)
-                p = ovl_crossing_onto(c, p, U->p[lo], U->p[k + k1 - lo],
-                                      ovl_cross_lam(qb[lo], qb[k + k1 - lo]), T->lo, T->hi);
-        }
+        /* rare: an edge nearly in the other's plane */
+        if (!ovl_in_box(c, p) &&
+            !ovl_crossing_outside(c, &p, U->p[lo], U->p[k + k1 - lo],
+                                  ovl_cross_lam(qb[lo], qb[k + k1 - lo]), tied, T->lo, T->hi))
+            continue;
         ovl_tri_full(T);
         ovl_tri_full(U);
         c->xb[U->slot] ^= 1 << k;
