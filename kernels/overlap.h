@@ -509,89 +509,70 @@ PD_FN pd_real ovl_cross_err(const ovl_ctx *c, pd_v3 a0, pd_v3 a1, pd_real s0, pd
     return ds > PD_R(0) ? c->pad + PD_R(2) * len * tol / ds : PD_REAL_MAX;
 }
 
-/* Narrows [*t0, *t1] to where a + t d lies within [lo, hi] on one axis; 0 when it never can. */
-PD_FN int ovl_slab(pd_real a, pd_real d, pd_real lo, pd_real hi, pd_real *t0, pd_real *t1)
+/*
+ * Narrows [*t0, *t1] to where a + t d lies within the box [lo, hi]; 0 when the segment it spans
+ * there never enters the box.
+ */
+PD_FN int ovl_span_in_box(pd_v3 a, pd_v3 d, pd_v3 lo, pd_v3 hi, pd_real *t0, pd_real *t1)
 {
-    if (d == PD_R(0)) return a >= lo && a <= hi;
-    pd_real u = (lo - a) / d, v = (hi - a) / d;
-    *t0 = pd_max(*t0, pd_min(u, v));
-    *t1 = pd_min(*t1, pd_max(u, v));
-    return 1;
+    const pd_real av[3] = {a.x, a.y, a.z}, dv[3] = {d.x, d.y, d.z};
+    const pd_real lv[3] = {lo.x, lo.y, lo.z}, hv[3] = {hi.x, hi.y, hi.z};
+    for (int k = 0; k < 3; k++) {
+        if (dv[k] == PD_R(0)) {
+            if (av[k] < lv[k] || av[k] > hv[k]) return 0;
+            continue;
+        }
+        pd_real u = (lv[k] - av[k]) / dv[k], v = (hv[k] - av[k]) / dv[k];
+        *t0 = pd_max(*t0, pd_min(u, v));
+        *t1 = pd_min(*t1, pd_max(u, v));
+    }
+    return *t0 <= *t1;
 }
 
 /*
- * Whether a crossing of canonical edge a->b, computed at p, can be a node of A n B: p lies in the
- * box where the kept parts of both solids meet (c->box_lo, c->box_hi, padded by the cull margin),
- * which holds every node of A n B, or the edge enters that box somewhere. An edge that never does
- * crosses nothing of the other solid, and its crossing is dropped.
+ * The pair loop's rare path: a crossing p = a + lam (b - a) of an edge (a its canonical end) that
+ * lies outside the box where the kept parts of both solids meet (c->box_lo, c->box_hi, padded by
+ * the cull margin), which holds every node of A n B. A stage of its own on the host, so the
+ * common path is laid out as without it. Returns 0 when the crossing is dropped.
  *
- * Such crossings come only from predicates that describe no one geometry. An edge lying in a
- * plane of the other solid to within the resolution straddles it when one end is decided by its
- * coordinates and the other by the tie-breaking, and its crossing point is then a ratio of side
- * values inside the tie band: anywhere along the edge. Whether the edge's line passes through
- * the other's triangle is decided by the edge-edge predicates, which are all ties for coplanar
- * lines however far apart they lie in the plane. In a single-precision lattice of 2 cm cubes,
- * the bottom edges of the lower cube and the top edges of the upper one crossed each other's side
- * faces so, coplanar to 3.6e-7 m: four cusps 16 mm from a contact 1e-5 m deep, whose faces'
- * polygons were open on both solids alike (so the sum of both solids' area vectors still
- * vanished) and turned the normal by 14 degrees; the depth along it was 3.9e-3 m, a one-step
- * force spike (tests/physics/test_overlap.c, single_precision_normal_of_coplanar_columns;
+ * An edge that never enters that box crosses nothing of the other solid, and its crossing is
+ * dropped. Such crossings come only from predicates that describe no one geometry. An edge lying
+ * in a plane of the other solid to within the resolution straddles it when one end is decided by
+ * its coordinates and the other by the tie-breaking, and its crossing point is then a ratio of
+ * side values inside the tie band: anywhere along the edge. Whether the edge's line passes
+ * through the other's triangle is decided by the edge-edge predicates, which are all ties for
+ * coplanar lines however far apart they lie in the plane. In a single-precision lattice of 2 cm
+ * cubes, the bottom edges of the lower cube and the top edges of the upper one crossed each
+ * other's side faces so, coplanar to 3.6e-7 m: four cusps 16 mm from a contact 1e-5 m deep,
+ * whose faces' polygons were open on both solids alike (so the sum of both solids' area vectors
+ * still vanished) and turned the normal by 14 degrees; the depth along it was 3.9e-3 m, a
+ * one-step force spike (tests/physics/test_overlap.c, single_precision_normal_of_coplanar_columns;
  * bench/RESULTS.md, 2026-12-07).
  *
- * A crossing outside the box on an edge that enters it is kept where it was computed (ovl_node
- * records its node within the box), unless the edge-edge predicates placed it (ovl_crossing_onto):
- * moving every such crossing along its edge into the box was tried, and opened other faces'
- * polygons (a resting pair of that lattice got a normal turned by 40 degrees).
- */
-PD_FN int ovl_crossing_in_box(const ovl_ctx *c, pd_v3 p, pd_v3 a, pd_v3 b)
-{
-    if (ovl_in_box(c, p)) return 1;
-    pd_v3 d = v3_sub(b, a);
-    pd_real t0 = PD_R(0), t1 = PD_R(1);
-    return ovl_slab(a.x, d.x, c->box_lo.x, c->box_hi.x, &t0, &t1) &&
-           ovl_slab(a.y, d.y, c->box_lo.y, c->box_hi.y, &t0, &t1) &&
-           ovl_slab(a.z, d.z, c->box_lo.z, c->box_hi.z, &t0, &t1) && t0 <= t1;
-}
-
-/*
- * A crossing p = a + lam (b - a) of canonical edge a->b whose place on the other triangle was
- * decided by the edge-edge predicates (ovl_point_in_tri could not tell), moved along the edge into
- * the box of that triangle (lo, hi) and of A n B (c->box_lo, c->box_hi) when it lies outside: as
- * ovl_crossing_in_box, but where the edge does enter the box. Such an edge is nearly parallel to
- * the other's plane, so a resolution moves its crossing by the resolution over their angle, while
- * the predicates, all ties near the other's edges, have placed it on the triangle. In a single-
+ * A crossing whose place on the other triangle was decided by the edge-edge predicates
+ * (ovl_point_in_tri could not tell: tied) is moved along its edge into the box of that triangle
+ * (lo_t, hi_t) and of A n B, where the edge enters both. Such an edge is nearly parallel to the
+ * other's plane, so a resolution moves its crossing by the resolution over their angle, while the
+ * predicates, all ties near the other's edges, have placed it on the triangle. In a single-
  * precision lattice of cubes, a cube's vertical edges, 1e-4 rad from the other's side faces and
  * within the resolution of their bottom edges, crossed them 4.6 mm below the contact, where the
  * line of the faces' intersection lies millimetres away: the pass's side polygons were open and
  * a resting contact's normal turned by 11 degrees (tests/physics/test_overlap.c,
  * single_precision_crossings_near_parallel_faces; bench/RESULTS.md, 2026-12-07 (later still)).
- */
-PD_FN pd_v3 ovl_crossing_onto(const ovl_ctx *c, pd_v3 p, pd_v3 a, pd_v3 b, pd_real lam, pd_v3 lo,
-                              pd_v3 hi)
-{
-    lo = v3(pd_max(lo.x, c->box_lo.x), pd_max(lo.y, c->box_lo.y), pd_max(lo.z, c->box_lo.z));
-    hi = v3(pd_min(hi.x, c->box_hi.x), pd_min(hi.y, c->box_hi.y), pd_min(hi.z, c->box_hi.z));
-    if (p.x >= lo.x && p.x <= hi.x && p.y >= lo.y && p.y <= hi.y && p.z >= lo.z && p.z <= hi.z)
-        return p;
-    pd_v3 d = v3_sub(b, a);
-    pd_real t0 = PD_R(0), t1 = PD_R(1);
-    if (!ovl_slab(a.x, d.x, lo.x, hi.x, &t0, &t1) || !ovl_slab(a.y, d.y, lo.y, hi.y, &t0, &t1) ||
-        !ovl_slab(a.z, d.z, lo.z, hi.z, &t0, &t1) || t0 > t1)
-        return p;
-    return v3_add(a, v3_scale(d, pd_min(pd_max(lam, t0), t1)));
-}
-
-/*
- * The rare path of a crossing p of edge a->b (lo: the canonical end) that lies outside the box of
- * A n B: whether it is kept (ovl_crossing_in_box), and if the edge-edge predicates placed it
- * (tied), where (ovl_crossing_onto, into the other triangle's box lo_t, hi_t). A stage of its
- * own on the host, so the pair loop's common path is laid out as without it.
+ *
+ * Any other crossing is kept where it was computed (ovl_node records its node within the box):
+ * moving every one along its edge into the box was tried, and opened other faces' polygons (a
+ * resting pair of that lattice got a normal turned by 40 degrees).
  */
 PD_STAGE_FN int ovl_crossing_outside(const ovl_ctx *c, pd_v3 *p, pd_v3 a, pd_v3 b, pd_real lam,
                                      int tied, pd_v3 lo_t, pd_v3 hi_t)
 {
-    if (!ovl_crossing_in_box(c, *p, a, b)) return 0;
-    if (tied) *p = ovl_crossing_onto(c, *p, a, b, lam, lo_t, hi_t);
+    pd_v3 d = v3_sub(b, a);
+    pd_real t0 = PD_R(0), t1 = PD_R(1);
+    if (!ovl_span_in_box(a, d, c->box_lo, c->box_hi, &t0, &t1)) return 0;
+    /* the span within A n B's box, narrowed to the other triangle's */
+    if (tied && ovl_span_in_box(a, d, lo_t, hi_t, &t0, &t1))
+        *p = v3_add(a, v3_scale(d, pd_min(pd_max(lam, t0), t1)));
     return 1;
 }
 

@@ -1626,7 +1626,7 @@ static void lattice_single_within_strips(const double (*poses)[14], int n)
  * coplanar lines, let them cross those faces there. Their cusps left the side faces' polygons
  * open on both solids alike, so the closure test passed, and the normal turned by 14 and 19
  * degrees: depths of 3.9e-3 and 4.6e-3 m for 1e-5 m, force spikes in the run. A crossing on an
- * edge that never enters the box where the kept parts meet is now dropped (ovl_crossing_in_box).
+ * edge that never enters the box where the kept parts meet is now dropped (ovl_crossing_outside).
  */
 TEST(single_precision_normal_of_coplanar_columns)
 {
@@ -1649,7 +1649,7 @@ TEST(single_precision_normal_of_coplanar_columns)
  * the resolution of their bottom edges, were placed on those faces by the edge-edge predicates
  * while their crossing points, from the side values, lay millimetres below the contact. The
  * normal turned by 11 and 40 degrees (depths 3.2e-3 and 1.0e-2 m for 1.6e-4 and 1.4e-6 m). Such a
- * crossing is now moved along its edge into the other triangle's box (ovl_crossing_onto).
+ * crossing is now moved along its edge into the other triangle's box (ovl_crossing_outside).
  */
 TEST(single_precision_crossings_near_parallel_faces)
 {
