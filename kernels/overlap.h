@@ -576,6 +576,29 @@ PD_STAGE_FN int ovl_crossing_outside(const ovl_ctx *c, pd_v3 *p, pd_v3 a, pd_v3 
     return 1;
 }
 
+/*
+ * Whether edge i -> j, whose crossing ovl_point_in_tri could not place (too near an edge of the
+ * triangle with corners id), passes through that triangle: the edge's line turns the same way
+ * about all three of the triangle's edges (exact canonical predicates, so the two triangles of
+ * the edge agree bit for bit). side 0: the edge is A's and the triangle B's; 1: the edge is B's,
+ * where det(u_j - u_i, t_a - u_i, t_b - u_i) equals the orientation of the triangle's edge
+ * a -> b against the edge i -> j, so the shared canonical predicate decides both tests.
+ * Rare, and a stage of its own on the host: inlined twice into the pair loop, it cost 2 % of a
+ * Schonhardt overlap's instructions in how gcc laid the loop out (bench/RESULTS.md, 2026-12-07,
+ * evening).
+ */
+PD_STAGE_FN int ovl_tied_in(ovl_ctx *c, int i, int j, const int *id, int side)
+{
+    int s0 = 0;
+    for (int k = 0; k < 3; k++) {
+        int a = id[k], b = id[(k + 1) % 3];
+        int s = side ? ovl_edge_edge_dir(c, a, b, i, j) : ovl_edge_edge_dir(c, i, j, a, b);
+        if (k == 0) s0 = s;
+        if (s == 0 || s != s0) return 0; /* as soon as one tells, as the predicates set flags */
+    }
+    return 1;
+}
+
 /* The corner alone on its side of a plane, given three sides (+-1); 3 when all are equal. */
 PD_FN int ovl_lone(const int sd[3])
 {
@@ -631,11 +654,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         /* near U's edges: the edge's line passes inside U when it turns the same way about all
          * three of U's edges (exact canonical predicates) */
         int tied = in == 0;
-        if (in == 0) {
-            int s0 = ovl_edge_edge_dir(c, i, j, U->id[0], U->id[1]);
-            in = s0 != 0 && s0 == ovl_edge_edge_dir(c, i, j, U->id[1], U->id[2]) &&
-                 s0 == ovl_edge_edge_dir(c, i, j, U->id[2], U->id[0]);
-        }
+        if (tied) in = ovl_tied_in(c, i, j, U->id, 0);
         if (in != 1) continue;
         /* rare: an edge nearly in the other's plane */
         if (!ovl_in_box(c, p) &&
@@ -659,13 +678,7 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
         int in =
             ovl_point_in_tri(T, p, ovl_cross_err(c, U->p[k], U->p[k1], qb[k], qb[k1], T->ptol));
         int tied = in == 0;
-        if (in == 0) {
-            /* det(u_j - u_i, t_a - u_i, t_b - u_i) equals the orientation of T's edge a->b
-             * against U's edge i->j, so the shared canonical predicate decides both tests */
-            int s0 = ovl_edge_edge_dir(c, T->id[0], T->id[1], i, j);
-            in = s0 != 0 && s0 == ovl_edge_edge_dir(c, T->id[1], T->id[2], i, j) &&
-                 s0 == ovl_edge_edge_dir(c, T->id[2], T->id[0], i, j);
-        }
+        if (tied) in = ovl_tied_in(c, i, j, T->id, 1);
         if (in != 1) continue;
         /* rare: an edge nearly in the other's plane */
         if (!ovl_in_box(c, p) &&
