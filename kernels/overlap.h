@@ -1764,12 +1764,50 @@ refilter:
         ovl_miss(o, c);
         return 0;
     }
+    /*
+     * And of its surface: a solid of surface area S holds at most S^(3/2) / (6 sqrt(pi)) (the
+     * isoperimetric inequality), and S is at most smag, each face's area being the sum of its
+     * cusps' signed areas; smag is the mean of a degenerate pair's two passes', whose bounds are
+     * then at most 2^(3/2) times that of the mean. A pass whose few cusps enclose more was no
+     * solid: in a single-precision lattice of cubes, a pass taken alone summed 6.8e-16 m^3 over
+     * cusps of 1.2e-12 m^2 in all (a bound of 3.4e-19 m^3), with a normal along the faces it
+     * rested on, and the depth along that normal was the cube's whole side
+     * (tests/physics/test_single_narrow.c, volume_beyond_its_surface; bench/RESULTS.md,
+     * 2026-12-07, night).
+     */
+    if (vol > PD_R(0.266) * smag * PD_SQRT(smag) + PD_R(1000) * PD_EPS * sm.vol_abs) {
+        ovl_miss(o, c);
+        return 0;
+    }
+    /*
+     * A n B lies in its nodes' box, and so does its centroid. One computed outside the box by
+     * more than the box's own extent, a resolution and the rounding of the moment's sum was
+     * divided out of sums that describe no solid: in a single-precision lattice of cubes, a
+     * first try that closed summed 5.6e-15 m^3 for a pair 3e-7 m deep (double: 1.4e-11), and its
+     * centroid came out 12 m away from nodes 2 cm apart; the torque about it spun two cubes
+     * apart (tests/physics/test_single_narrow.c, centroid_beyond_its_nodes; bench/RESULTS.md,
+     * 2026-12-07, night). The moment's terms reach to the coordinates' magnitude L
+     * (pad = OVL_SNAP L), so its sum's rounding over the volume, taken as the guards above take
+     * 1000 ulps, can move a thin overlap's centroid by millimetres in single precision, and is
+     * allowed for.
+     */
+    pd_v3 cen = v3_scale(mom, PD_R(1) / vol);
+    if (nodes_known) {
+        pd_real slack = c->pad + PD_R(2000) * PD_EPS * sm.vol_abs * (c->pad / OVL_SNAP) / vol;
+        pd_v3 ext = v3_add(v3_sub(nhi, nlo), v3(slack, slack, slack));
+        pd_v3 lo = v3_sub(nlo, ext), hi = v3_add(nhi, ext);
+        if (!(cen.x >= lo.x && cen.x <= hi.x && cen.y >= lo.y && cen.y <= hi.y && cen.z >= lo.z &&
+              cen.z <= hi.z)) {
+            ovl_miss(o, c);
+            return 0;
+        }
+    }
     o->hit = 1;
     o->degenerate = degenerate;
     o->kept_a = c->na;
     o->kept_b = c->nb;
     o->volume = vol;
-    o->centroid = v3_scale(mom, PD_R(1) / vol);
+    o->centroid = cen;
     /* eq. 4.19 from both sides: A's faces inside B minus B's faces inside A (equal and opposite
      * in exact arithmetic; faces shared by both cancel). Where one solid lies wholly inside the
      * other, the faces inside form a closed surface and the sum is rounding noise against its
@@ -1831,6 +1869,31 @@ PD_FN void ovl_out_mean(ovl_out *o, const ovl_out *p)
 }
 
 /*
+ * Single precision: whether a closed try of B at sh (*o, with ovl_compute_try's *faces) can be
+ * taken, every face of its passes closing (ovl_faces_close). A degenerate try one of whose two
+ * passes' faces close is taken again from that pass alone (*o). Double precision's tie band is
+ * too narrow for open faces (ovl_faces_close): always.
+ */
+PD_FN int ovl_faces_good(const ovl_in *sh, ovl_out *o, int faces)
+{
+#if PD_DOUBLE
+    (void)sh, (void)o, (void)faces;
+    return 1;
+#else
+    if (!o->hit || !o->degenerate || faces == 3) return 1;
+    pd_real pad;
+    int sides, f2;
+    ovl_out alone;
+    if ((faces == 1 || faces == 2) && ovl_compute_try(sh, &alone, &pad, faces, &sides, &f2) &&
+        alone.hit) {
+        *o = alone;
+        return 1;
+    }
+    return 0;
+#endif
+}
+
+/*
  * The overlap of A and B: volume, centroid, normal and depth (section 4.2). Where the
  * predicates disagree (ovl_compute_try: the surface does not close, or the volume exceeds the
  * nodes' box), B is moved by 8 resolutions along one of three fixed
@@ -1869,24 +1932,37 @@ PD_FN void ovl_out_mean(ovl_out *o, const ovl_out *p)
  * (tests/physics/test_overlap.c, resting_cubes_in_single_precision). Failing that, the first
  * direction that agreed one way is the answer; where none did, the pair counts as not touching
  * this step.
+ *
+ * Single precision also asks every answer for closed faces (ovl_faces_close, ovl_faces_good),
+ * not only closed sums. Its tie band is wide enough for a pass to leave both solids' faces open
+ * alike, and such a pass's normal can be anything: in lattices of cubes landing, answers whose
+ * sums closed and whose faces did not were 0.0088 to 0.31 rad off, with depths along them 34 to
+ * 3 900 times the contact's (tests/physics/test_single_narrow.c). So there:
+ * - a first try whose faces are open goes on to the moves, and a way whose faces are open does
+ *   not agree;
+ * - a direction one of whose ways has its faces closed keeps that way as a one-way answer;
+ * - the fallbacks are, in order, the first try's pass alone where that pass's faces close, and a
+ *   one-way answer whose faces close (biased by the move to first order: 8 resolutions of depth,
+ *   a fifth to a half of a resting contact's, in volume and depth);
+ * - answers with open faces are not taken: the pair counts as not touching this step.
+ * Over sixteen variants of examples/cube_lattice.json in single precision, 0.4 s each, steps
+ * whose largest overlap exceeded 0.05 of a size went from 8 to 0 (bench/RESULTS.md, 2026-12-07,
+ * night). Double precision's faces always close, and its order is the one above.
  */
 PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
 {
     pd_real pad = PD_R(0);
     int sides = 0, first, faces0, faces;
     if (ovl_compute_try(in, o, &pad, 0, &first, &faces0)) {
-        /* closed, but with one pass's faces open: the other pass alone (ovl_faces_close) */
-        ovl_out alone;
-        if ((faces0 == 1 || faces0 == 2) &&
-            ovl_compute_try(in, &alone, &pad, faces0, &sides, &faces))
-            *o = alone;
-        return;
+        if (ovl_faces_good(in, o, faces0)) return;
     }
+    /* a direction that answered one way (lone), preferably one whose faces close (lone_good;
+     * double precision's always do) */
+    ovl_out lone, back;
+    int have_lone = 0, lone_good = 0;
     const pd_real dir[9] = {PD_R(0.5377), PD_R(0.7183), PD_R(0.4412),  PD_R(-0.6626), PD_R(0.2361),
                             PD_R(0.7107), PD_R(0.3119), PD_R(-0.8231), PD_R(0.4745)};
     ovl_in sh = *in;
-    ovl_out lone, back;
-    int have_lone = 0;
     pd_real span = v3_norm(v3_sub(in->cb, in->ca));
     for (int k = 0; k < 6; k++) {
         pd_real m = PD_R(8) * pad, pad_back;
@@ -1900,28 +1976,47 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
         sh.tr[2] = in->tr[2] + u.z;
         sh.cb = v3_add(v3_add(in->cb, u), turn);
         if (!ovl_compute_try(&sh, o, &pad, 0, &sides, &faces)) continue;
+        int good = ovl_faces_good(&sh, o, faces);
         sh.tr[0] = in->tr[0] - u.x;
         sh.tr[1] = in->tr[1] - u.y;
         sh.tr[2] = in->tr[2] - u.z;
         sh.cb = v3_add(v3_sub(in->cb, u), turn);
         if (ovl_compute_try(&sh, &back, &pad_back, 0, &sides, &faces)) {
+            int good_back = ovl_faces_good(&sh, &back, faces);
+            /* single precision: a way whose faces close where the other's do not answers one
+             * way, before any answer whose faces are open */
+            if (o->hit && back.hit && good != good_back && !lone_good) {
+                lone = good ? *o : back;
+                have_lone = lone_good = 1;
+            }
             /* single precision, both ways touching with normals more than 0.1 rad apart: one of
-             * them is no contact direction (see below), and the next direction is taken */
+             * them is no contact direction (see above), and the next direction is taken */
             if (!PD_DOUBLE && o->hit && back.hit && v3_dot(o->normal, back.normal) < PD_R(0.995))
                 continue;
             if (o->hit && back.hit)
                 ovl_out_mean(o, &back);
             else if (!back.hit) /* touching at most one way: the miss */
                 *o = back;
-            return;
+            if (good && good_back) return;
+            continue; /* single precision: faces open one way or both */
         }
-        if (!have_lone) lone = *o;
+        if (!have_lone || (good && !lone_good)) {
+            lone = *o;
+            lone_good = good;
+        }
         have_lone = 1;
     }
     /* one pass alone, where exactly one closed (where both did, the box guards found them
-     * disagreeing otherwise, and neither is trusted) */
-    if ((first == 1 || first == 2) && ovl_compute_try(in, o, &pad, first, &sides, &faces)) return;
-    if (have_lone) { /* moved one way only */
+     * disagreeing otherwise, and neither is trusted), first if its faces close */
+    int alone = first == 1 || first == 2;
+    if (alone && (faces0 & first) && ovl_compute_try(in, o, &pad, first, &sides, &faces)) return;
+    if (have_lone && lone_good) { /* moved one way only: biased by the move to first order */
+        *o = lone;
+        return;
+    }
+    /* double precision only: answers whose faces are open (single precision's alone are) */
+    if (PD_DOUBLE && alone && ovl_compute_try(in, o, &pad, first, &sides, &faces)) return;
+    if (PD_DOUBLE && have_lone) {
         *o = lone;
         return;
     }

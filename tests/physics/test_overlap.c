@@ -1723,15 +1723,20 @@ TEST(single_precision_faces_open_alike)
 
 /*
  * Particles 40 and 56 at step 6 911 of a single-precision lattice run (examples/cube_lattice.json
- * with the region moved by 3 mm and 1 mm in x and y), resting 1.7e-6 m deep, about 9 resolutions.
+ * with the region moved by 3 mm and 1 mm in x and y), resting 1.7e-6 m deep, about 7 resolutions.
  * Summed about its contact point (OVL_ORIGIN, the engine's path for a contact that lasts), no try
  * closed at the coordinates, and B moved by 8 resolutions one way left a sliver of
  * 1.8e-12 m^3 whose normal was -x, rounding noise, and whose depth along it the cube's whole
  * side: the mean of the two ways had a depth of 8.1e-3 m. Ways whose normals differ by more than
- * 0.1 rad no longer agree (ovl_compute). Checked: the volume as in
- * resting_cubes_in_single_precision, and the depth against the normal single precision gives,
- * sqrt(2) W times its angle to double's, plus 2 resolutions: the mean's was 1.2e-4 m. Its normal
- * is 1.1e-3 rad from double's here, the depth 1.9e-5 m for 1.7e-6 (printed).
+ * 0.1 rad no longer agree (ovl_compute). Checked, about the contact point (single precision's
+ * own where it touches plainly, else double's): the volume within 10 resolutions over the
+ * contact's area and the depth within sqrt(2) W times the normal's angle to double's plus 10
+ * resolutions, the tolerances of a one-way answer (tests/physics/test_single_narrow.c); the
+ * mean's depth was 1.2e-4 m over that. Since single precision asks every answer for closed
+ * faces (ovl_faces_good), that sliver's way no longer agrees in any case, and this test passes
+ * without the normal rule too; the rule stays, as cheap as it is. Summed plainly, every try of
+ * this pair leaves faces open, and single precision no longer answers from open faces: it counts
+ * as not touching yet, which a contact within 10 resolutions may (printed).
  */
 TEST(single_precision_moves_that_disagree)
 {
@@ -1753,18 +1758,26 @@ TEST(single_precision_moves_that_disagree)
     }
     ovl_result d, s, o;
     CHECK(ovl_run_f64(&su, &d) == PD_OK && ovl_run_f32(&su, &s) == PD_OK);
-    CHECK(d.hit && s.hit);
-    if (d.hit && s.hit) {
-        /* as the engine takes a contact that lasts: about its last contact point */
+    CHECK(d.hit);
+    if (!s.hit) {
+        printf("  plain: double %.3e m deep; single: not touching yet\n", d.depth_eff);
+        CHECK(d.depth_eff <= 10 * res);
+    }
+    if (d.hit) {
+        /* as the engine takes a contact that lasts: about its last contact point, the one
+         * single precision found plainly before it asked for closed faces (A's frame) */
+        static const double last[3] = {8.6205705883912742e-05, -0.0032887826673686504,
+                                       0.0080596413463354111};
         su.flags = OVL_ORIGIN;
-        memcpy(su.org, s.point_eff, sizeof su.org);
+        memcpy(su.org, last, sizeof su.org);
         CHECK(ovl_run_f32(&su, &o) == PD_OK);
         CHECK(o.hit);
         for (int k = 0; k < 2 && o.hit; k++) {
             const ovl_result *r = k ? &o : &s;
-            CHECK_NEAR(d.volume, r->volume, 2 * res * LATTICE_AREA);
+            if (!r->hit) continue;
+            CHECK_NEAR(d.volume, r->volume, 10 * res * LATTICE_AREA);
             double angle = angle_between(d.normal, r->normal);
-            CHECK_NEAR(d.depth_eff, r->depth_eff, sqrt(2) * w * angle + 2 * res);
+            CHECK_NEAR(d.depth_eff, r->depth_eff, sqrt(2) * w * angle + 10 * res);
             printf("  %s: V %.4e m^3, single %+.1e relative; normal %.1e rad apart; depth "
                    "%.3e m, single %.3e m\n",
                    k ? "about the contact point" : "plain", d.volume, r->volume / d.volume - 1,
