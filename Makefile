@@ -63,7 +63,7 @@ $(BUILD)/tests/%: tests/%.c $(wildcard tests/*.h) $(BUILD)/libpolydem.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) -Itests $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
 
-$(BUILD)/bench/%: bench/%.c $(wildcard tests/*.h) $(BUILD)/libpolydem.a
+$(BUILD)/bench/%: bench/%.c $(wildcard bench/*.h) $(wildcard tests/*.h) $(BUILD)/libpolydem.a
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS) $< $(BUILD)/libpolydem.a $(LDFLAGS) $(LDLIBS) -o $@
 

@@ -1,7 +1,7 @@
 #!/bin/sh
 # test_bench.sh - bench/contacts (the pairs of a saved state through the overlap, on the host):
-# two analytic contacts read back from a result file, and bad input; bench/stats_rows.sh and
-# bench/overlap run.
+# two analytic contacts read back from a result file, and bad input; bench/replay against a
+# single-precision run's own stats; bench/stats_rows.sh and bench/overlap run.
 . tests/cli/lib.sh
 CONTACTS=${POLYDEM%/polydem}/bench/contacts
 
@@ -61,6 +61,46 @@ expect_fail contacts_missing_file 1 "nope.h5: not an HDF5 file" -- "$CONTACTS" "
 expect_fail contacts_json_not_h5 1 "pairs.json: not an HDF5 file" -- "$CONTACTS" "$tmp/pairs.json"
 expect_fail contacts_frame_out_of_range 1 "frame 99 of /frames/position" -- \
     "$CONTACTS" "$tmp/pairs.h5" --frame 99
+
+# bench/replay (a single-precision run's particle contacts replayed step by step as the engine
+# computed them): the pairs above in single precision, the first pair closing at 0.05 m/s, with a
+# frame and a stats row every step. Each frame's largest depth / size must be that step's
+# /stats/max_overlap_ratio: with PoCL (CI) to every printed digit; the band, 1e-4 relative,
+# leaves room for a device that rounds otherwise. The rows change by ~5 % a step, so a frame read
+# against the wrong row fails.
+REPLAY=${POLYDEM%/polydem}/bench/replay
+sed -e 's/"name": "pairs"/"name": "pairs-single", "precision": "single"/' \
+    -e 's/"duration": 2e-6, "output_interval": 1e-6}/"duration": 2e-5, "output_interval": 1e-6, "stats_interval": 1e-6}/' \
+    -e 's/"position": \[0.016118919540164693, 0, 0\], "velocity": \[0, 0, 1\]/"position": [0.016118919540164693, 0, 0], "velocity": [-0.05, 0.01, 1]/' \
+    "$tmp/pairs.json" >"$tmp/single.json"
+if ! $POLYDEM run "$tmp/single.json" -o "$tmp/single.h5" --quiet 2>"$tmp/err"; then
+    bad replay_run "$(cat "$tmp/err")"
+elif ! "$REPLAY" "$tmp/single.h5" 0 20 >"$tmp/rp" 2>"$tmp/err"; then
+    bad replay_runs "$(cat "$tmp/err")"
+else
+    h5dump -y -w 1 -d /stats/max_overlap_ratio "$tmp/single.h5" |
+        sed -n '/DATA {/,/}/p' | tr -d ' ,' | grep -E '^[0-9.e+-]+$' >"$tmp/rows"
+    if awk 'NR == FNR { row[n++] = $1 + 0; next }
+        /^frame / { f = $2 + 0; v = $10 + 0; k++
+                    if (!(f in row) || row[f] <= 0 || v / row[f] - 1 > 1e-4 || 1 - v / row[f] > 1e-4) bad++ }
+        END { exit k == 21 && n == 21 && !bad && row[20] > 1.5 * row[0] ? 0 : 1 }' \
+        "$tmp/rows" "$tmp/rp"; then
+        ok replay_matches_the_runs_stats
+    else bad replay_matches_the_runs_stats "$(cat "$tmp/rows" "$tmp/rp")"; fi
+    if "$REPLAY" "$tmp/single.h5" 3 4 --pair 1 0 >"$tmp/rp" 2>"$tmp/err" &&
+        grep -q "^  pair 0 1, frame 3: poses {.*}, last 0 " "$tmp/rp" &&
+        grep -q "^  pair 0 1, frame 4: poses {.*}, last 1 " "$tmp/rp" &&
+        grep -q "^  pair 0 1, frame 4: depth / size [0-9.e-]*, volume " "$tmp/rp"; then
+        ok replay_one_pair
+    else bad replay_one_pair "$(cat "$tmp/rp" "$tmp/err")"; fi
+fi
+expect_fail replay_no_args 2 "usage" -- "$REPLAY"
+expect_fail replay_backwards 2 "usage" -- "$REPLAY" "$tmp/single.h5" 5 4
+expect_fail replay_bad_pair 2 "the run has 4 particles" -- "$REPLAY" "$tmp/single.h5" 0 1 --pair 0 9
+expect_fail replay_double_run 1 "a double-precision run" -- "$REPLAY" "$tmp/pairs.h5" 0 1
+expect_fail replay_missing_file 1 "nope.h5: not an HDF5 file" -- "$REPLAY" "$tmp/nope.h5" 0 1
+expect_fail replay_frame_out_of_range 1 "frame 99 of /frames/position" -- \
+    "$REPLAY" "$tmp/single.h5" 99 100
 
 # bench/stats_rows.sh on a small lattice: both runs and the cost per row are printed (a figure,
 # so no band on it), and bad use is refused
