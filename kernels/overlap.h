@@ -881,11 +881,10 @@ PD_FN int ovl_closes(pd_real open, pd_real mag)
  * the open polygons' area, and the normal turned by 7 to 11 degrees in a lattice of cubes
  * landing (tests/physics/test_overlap.c, single_precision_faces_open_alike; bench/RESULTS.md,
  * 2026-12-07 (later still)). Such passes measured 2 400 to 25 000 resolutions, closed ones up to
- * 35: the bound is 256, plus the sums' rounding. ovl_compute takes a first try whose other pass
- * closes face by face from that pass alone. It is no requirement otherwise: resting contacts a
- * few resolutions deep can have open faces in every pass of every try, and requiring closed ones
- * lost two of them. Double precision's tie band is 1e-16 of the configuration, too narrow for a
- * crossing computed that far off, and skips the sums.
+ * 35: the bound is 256, plus the sums' rounding. ovl_compute takes no answer whose faces are
+ * open (ovl_faces_good; a contact a few resolutions deep whose every try leaves them open counts
+ * as not touching for that step). Double precision's tie band is 1e-16 of the configuration, too
+ * narrow for a crossing computed that far off, and skips the sums.
  */
 PD_FN int ovl_faces_close(const ovl_ctx *c)
 {
@@ -1947,7 +1946,7 @@ PD_FN int ovl_faces_good(const ovl_in *sh, ovl_out *o, int faces)
  * - answers with open faces are not taken: the pair counts as not touching this step.
  * Over sixteen variants of examples/cube_lattice.json in single precision, 0.4 s each, steps
  * whose largest overlap exceeded 0.05 of a size went from 8 to 0 (bench/RESULTS.md, 2026-12-07,
- * night). Double precision's faces always close, and its order is the one above.
+ * night). Double precision's faces always close, so its answers are the ones above.
  */
 PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
 {
@@ -1956,10 +1955,10 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     if (ovl_compute_try(in, o, &pad, 0, &first, &faces0)) {
         if (ovl_faces_good(in, o, faces0)) return;
     }
-    /* a direction that answered one way (lone), preferably one whose faces close (lone_good;
-     * double precision's always do) */
+    /* the first direction that answered one way with its faces closed (double precision's
+     * always are) */
     ovl_out lone, back;
-    int have_lone = 0, lone_good = 0;
+    int lone_good = 0;
     const pd_real dir[9] = {PD_R(0.5377), PD_R(0.7183), PD_R(0.4412),  PD_R(-0.6626), PD_R(0.2361),
                             PD_R(0.7107), PD_R(0.3119), PD_R(-0.8231), PD_R(0.4745)};
     ovl_in sh = *in;
@@ -1987,7 +1986,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
              * way, before any answer whose faces are open */
             if (o->hit && back.hit && good != good_back && !lone_good) {
                 lone = good ? *o : back;
-                have_lone = lone_good = 1;
+                lone_good = 1;
             }
             /* single precision, both ways touching with normals more than 0.1 rad apart: one of
              * them is no contact direction (see above), and the next direction is taken */
@@ -2000,23 +1999,19 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
             if (good && good_back) return;
             continue; /* single precision: faces open one way or both */
         }
-        if (!have_lone || (good && !lone_good)) {
+        if (good && !lone_good) {
             lone = *o;
-            lone_good = good;
+            lone_good = 1;
         }
-        have_lone = 1;
     }
     /* one pass alone, where exactly one closed (where both did, the box guards found them
-     * disagreeing otherwise, and neither is trusted), first if its faces close */
-    int alone = first == 1 || first == 2;
-    if (alone && (faces0 & first) && ovl_compute_try(in, o, &pad, first, &sides, &faces)) return;
-    if (have_lone && lone_good) { /* moved one way only: biased by the move to first order */
-        *o = lone;
+     * disagreeing otherwise, and neither is trusted), where its faces close */
+    if ((first == 1 || first == 2) && (faces0 & first) &&
+        ovl_compute_try(in, o, &pad, first, &sides, &faces))
         return;
-    }
-    /* double precision only: answers whose faces are open (single precision's alone are) */
-    if (PD_DOUBLE && alone && ovl_compute_try(in, o, &pad, first, &sides, &faces)) return;
-    if (PD_DOUBLE && have_lone) {
+    /* moved one way only, biased by the move to first order (in double precision every way's
+     * faces close, so these two are the fallbacks they were before faces were asked for) */
+    if (lone_good) {
         *o = lone;
         return;
     }

@@ -15,6 +15,7 @@
 #include "overlap_predicates.h" /* OVL_ORIGIN */
 #include "overlap_run.h"
 #include "box_pairs.h"
+#include "lattice_cube.h"
 #include "polydem.h"
 #include "ref_overlap.h"
 #include "test.h"
@@ -734,29 +735,6 @@ TEST(boxes_within_the_tie_band_on_several_axes)
     CHECK_NEAR(1, rel, 0);
 }
 
-/* The engine's cube (builtin:cube, its triangles) at size 0.02 m, of half side LATTICE_H: the
- * particles of examples/cube_lattice.json. */
-#define LATTICE_H (0.40299798850411739 * 0.02)
-/* Single precision's resolution between two of them stacked (64 ulps of the largest coordinate
- * in A's frame, B's far corners at ~0.0161 m + sqrt(3) h), and the area of a face. */
-#define LATTICE_RES (64 * 1.1920929e-7 * (0.0161 + sqrt(3) * LATTICE_H))
-#define LATTICE_AREA (4 * LATTICE_H * LATTICE_H)
-static pd_mesh *lattice_cube(void)
-{
-    const double h = LATTICE_H;
-    static const int t[36] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
-                              2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
-    double v[24];
-    for (int i = 0; i < 8; i++)
-        for (int k = 0; k < 3; k++)
-            v[3 * i + k] = (i >> k) & 1 ? h : -h;
-    pd_mesh *m = NULL;
-    pd_error err = {0};
-    if (pd_mesh_from_arrays(v, 8, t, 12, "cube", &m, &err) != PD_OK)
-        printf("  lattice cube: %s\n", err.msg);
-    return m;
-}
-
 /*
  * Two 2 cm cubes of a column in a simulated lattice (bench/RESULTS.md, 2026-12-05), 1.1e-6 m
  * deep, their side faces within rounding of each other's in two directions and turned against
@@ -771,7 +749,7 @@ static pd_mesh *lattice_cube(void)
 TEST(stacked_cubes_turned_by_rounding)
 {
     const double h = LATTICE_H;
-    pd_mesh *m = lattice_cube();
+    pd_mesh *m = lattice_cube_mesh(LATTICE_SIZE);
     pd_error err = {0};
     CHECK(m != NULL);
     if (!m) return;
@@ -1448,14 +1426,6 @@ static void lattice_pair(const pd_mesh *m, const double *q, pd_contact *d, pd_co
     *s = overlap(m, pa, m, pb, PD_OVERLAP_SINGLE);
 }
 
-/* The angle between unit vectors u and v (rad), from both products: exact near 0 as well. */
-static double angle_between(const double *u, const double *v)
-{
-    double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2],
-           cz = u[0] * v[1] - u[1] * v[0];
-    return atan2(sqrt(cx * cx + cy * cy + cz * cz), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
-}
-
 /*
  * Overlaps of lattice cube pairs (poses: A's x y z qw qx qy qz, then B's) in double and in single
  * precision: double must touch by more than vmin (m^3), single where double does, with the volume
@@ -1466,7 +1436,7 @@ static double angle_between(const double *u, const double *v)
 static void lattice_single_matches_double(const double (*poses)[14], int n, double vmin,
                                           double vres)
 {
-    pd_mesh *m = lattice_cube();
+    pd_mesh *m = lattice_cube_mesh(LATTICE_SIZE);
     CHECK(m != NULL);
     if (!m) return;
     const double res = LATTICE_RES, area = LATTICE_AREA;
@@ -1596,7 +1566,7 @@ TEST(single_precision_depth_of_a_grazing_crossing)
  */
 static void lattice_single_within_strips(const double (*poses)[14], int n)
 {
-    pd_mesh *m = lattice_cube();
+    pd_mesh *m = lattice_cube_mesh(LATTICE_SIZE);
     CHECK(m != NULL);
     if (!m) return;
     const double res = LATTICE_RES, w = 2 * LATTICE_H;
@@ -1740,7 +1710,7 @@ TEST(single_precision_faces_open_alike)
  */
 TEST(single_precision_moves_that_disagree)
 {
-    pd_mesh *m = lattice_cube();
+    pd_mesh *m = lattice_cube_mesh(LATTICE_SIZE);
     CHECK(m != NULL);
     if (!m) return;
     const double res = LATTICE_RES, w = 2 * LATTICE_H;

@@ -31,15 +31,8 @@
 #include "narrow_phase.h"
 #include "overlap_run.h"
 #include "polydem.h"
+#include "lattice_cube.h"
 #include "test.h"
-
-/* The engine's cube (builtin:cube at a volume-equivalent diameter of 1 m) and its triangles. */
-#define CUBE_H 0.40299798850411739
-#define SIZE 0.02
-#define RES (64 * 1.1920929e-7 * (0.0161 + sqrt(3) * CUBE_H * SIZE))
-#define AREA (4 * CUBE_H * CUBE_H * SIZE * SIZE)
-static const int cube_tris[36] = {0, 2, 3, 0, 3, 1, 4, 5, 7, 4, 7, 6, 0, 1, 5, 0, 5, 4,
-                                  2, 6, 7, 2, 7, 3, 0, 4, 6, 0, 6, 2, 1, 3, 7, 1, 7, 5};
 
 /* One pair as a run left it: A's x y z qw qx qy qz, then B's (single-precision values), whether
  * it touched in the last step, and there its contact point (world, m). */
@@ -50,26 +43,13 @@ typedef struct lattice_case {
     double last[3];
 } lattice_case;
 
-static pd_mesh *cube_mesh(double size)
-{
-    double v[24];
-    for (int i = 0; i < 8; i++)
-        for (int k = 0; k < 3; k++)
-            v[3 * i + k] = (i >> k) & 1 ? CUBE_H * size : -CUBE_H * size;
-    pd_mesh *m = NULL;
-    pd_error err = {0};
-    if (pd_mesh_from_arrays(v, 8, cube_tris, 12, "cube", &m, &err) != PD_OK)
-        printf("  cube: %s\n", err.msg);
-    return m;
-}
-
 static np_body body(const double *p)
 {
     np_body b;
     b.x = v3((float)p[0], (float)p[1], (float)p[2]);
     for (int k = 0; k < 4; k++)
         b.q[k] = (float)p[3 + k];
-    b.size = (float)SIZE;
+    b.size = (float)LATTICE_SIZE;
     b.shape = 0;
     return b;
 }
@@ -82,7 +62,7 @@ static int engine_single(const pd_mesh *unit, const int *vt_off, const int *vt,
     for (int i = 0; i < 24; i++)
         vert[i] = (float)unit->verts[i];
     int voff[2] = {0, 8}, toff[2] = {0, 12};
-    np_shapes sh = {vert, cube_tris, voff, toff, vt_off, vt, NULL, NULL, NULL};
+    np_shapes sh = {vert, lattice_cube_tris, voff, toff, vt_off, vt, NULL, NULL, NULL};
     np_body a = body(c->pose), b = body(c->pose + 7);
     ovl_in in;
     float ra[9];
@@ -107,21 +87,13 @@ static int engine_single(const pd_mesh *unit, const int *vt_off, const int *vt,
     return ok;
 }
 
-/* The angle between unit vectors u and v (rad), from both products: exact near 0 as well. */
-static double angle_between(const double *u, const double *v)
-{
-    double cx = u[1] * v[2] - u[2] * v[1], cy = u[2] * v[0] - u[0] * v[2],
-           cz = u[0] * v[1] - u[1] * v[0];
-    return atan2(sqrt(cx * cx + cy * cy + cz * cz), u[0] * v[0] + u[1] * v[1] + u[2] * v[2]);
-}
-
 /* Checks the cases against double precision with the tolerances of the file's comment. */
 static void check_cases(const lattice_case *cs, int n)
 {
-    pd_mesh *unit = cube_mesh(1), *m = cube_mesh(SIZE);
+    pd_mesh *unit = lattice_cube_mesh(1), *m = lattice_cube_mesh(LATTICE_SIZE);
     int *vt_off = NULL, *vt = NULL;
     CHECK(unit && m && ovl_vertex_triangles(unit, &vt_off, &vt) == PD_OK);
-    const double w = 2 * CUBE_H * SIZE;
+    const double w = 2 * LATTICE_H;
     for (int k = 0; k < n && vt; k++) {
         const lattice_case *c = &cs[k];
         pd_pose pa = {{c->pose[0], c->pose[1], c->pose[2]},
@@ -138,7 +110,7 @@ static void check_cases(const lattice_case *cs, int n)
         if (!s.hit) {
             printf("  %s: double %.3e m deep; single: not touching yet\n", c->what,
                    d.effective_depth);
-            CHECK(d.effective_depth <= 10 * RES);
+            CHECK(d.effective_depth <= 10 * LATTICE_RES);
             continue;
         }
         double sn[3] = {s.normal.x, s.normal.y, s.normal.z};
@@ -155,10 +127,10 @@ static void check_cases(const lattice_case *cs, int n)
                                                         : (double)s.point_eff.z);
             dp += e * e;
         }
-        CHECK_NEAR(d.volume, (double)s.vol_eff, 10 * RES * AREA);
+        CHECK_NEAR(d.volume, (double)s.vol_eff, 10 * LATTICE_RES * LATTICE_AREA);
         CHECK(sqrt(dp) <= w); /* within the contact's face */
         CHECK(angle <= turn);
-        CHECK_NEAR(d.effective_depth, (double)s.depth_eff, sqrt(2) * w * angle + 10 * RES);
+        CHECK_NEAR(d.effective_depth, (double)s.depth_eff, sqrt(2) * w * angle + 10 * LATTICE_RES);
     }
     free(vt_off);
     free(vt);
