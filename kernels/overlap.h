@@ -612,6 +612,43 @@ PD_FN int ovl_lone_edge(int lone, int h)
     return h ? lone + 2 * (lone == 0) : lone - (lone != 0);
 }
 
+/*
+ * The crossings of E's two edges at its lone corner (lone: ovl_lone of its sides sd, with side
+ * values q against F's plane) through F, each emitted with its node and cusps. side 0: E is A's
+ * triangle and F is B's; 1: the other way. first: the pair's first crossing node so far (-1:
+ * none; OVL_PLACES joins the pair's crossings); returns it updated.
+ */
+PD_FN int ovl_edges_through(ovl_ctx *c, ovl_tri *E, ovl_tri *F, const pd_real *q, const int *sd,
+                            int lone, int side, int first)
+{
+    for (int h = 0; h < 2; h++) {
+        int k = ovl_lone_edge(lone, h);
+        int k1 = (k + 1) % 3;
+        int i = E->id[k], j = E->id[k1];
+        int lo = i < j ? k : k1; /* the canonical end, chosen by index (no branch) */
+        int hi = k + k1 - lo;
+        pd_v3 p = ovl_cross_point(E->p[lo], E->p[hi], q[lo], q[hi]);
+        int in = ovl_point_in_tri(F, p, ovl_cross_err(c, E->p[k], E->p[k1], q[k], q[k1], F->ptol));
+        /* near F's edges: the edge's line passes inside F when it turns the same way about all
+         * three of F's edges (exact canonical predicates) */
+        int tied = in == 0;
+        if (tied) in = ovl_tied_in(c, i, j, F->id, side);
+        if (in != 1) continue;
+        /* rare: an edge nearly in the other's plane */
+        if (!ovl_in_box(c, p) &&
+            !ovl_crossing_outside(c, &p, E->p[lo], E->p[hi], ovl_cross_lam(q[lo], q[hi]), tied,
+                                  F->lo, F->hi))
+            continue;
+        ovl_tri_full(E);
+        ovl_tri_full(F);
+        (side ? c->xb : c->xa)[E->slot] ^= 1 << k; /* for ovl_resolve */
+        first = ovl_crossing_node(c, E, k, lo, p, q, sd[k1], side, first);
+        pd_v3 te = v3_scale(E->e[k], (pd_real)-sd[k1]); /* into F's solid; sd is +-1 */
+        ovl_crossing_cusps(c, p, te, E->m[k], E->nu, F->nu, side);
+    }
+    return first;
+}
+
 /* All cusps between A's triangle T and B's triangle U from edges of one crossing the other (the
  * caller has checked that their boxes meet). */
 PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
@@ -641,57 +678,8 @@ PD_FN void ovl_pair(ovl_ctx *c, ovl_tri *T, ovl_tri *U)
      * summation order of an edge-by-edge loop), because which edges cross is unpredictable for
      * a new pair.
      */
-    int first = -1; /* the first crossing node of this pair (OVL_PLACES) */
-    /* edges of T through U */
-    for (int h = 0; h < 2; h++) {
-        int k = ovl_lone_edge(la, h);
-        int k1 = (k + 1) % 3;
-        int i = T->id[k], j = T->id[k1];
-        int lo = i < j ? k : k1; /* the canonical end, chosen by index (no branch) */
-        pd_v3 p = ovl_cross_point(T->p[lo], T->p[k + k1 - lo], qa[lo], qa[k + k1 - lo]);
-        int in =
-            ovl_point_in_tri(U, p, ovl_cross_err(c, T->p[k], T->p[k1], qa[k], qa[k1], U->ptol));
-        /* near U's edges: the edge's line passes inside U when it turns the same way about all
-         * three of U's edges (exact canonical predicates) */
-        int tied = in == 0;
-        if (tied) in = ovl_tied_in(c, i, j, U->id, 0);
-        if (in != 1) continue;
-        /* rare: an edge nearly in the other's plane */
-        if (!ovl_in_box(c, p) &&
-            !ovl_crossing_outside(c, &p, T->p[lo], T->p[k + k1 - lo],
-                                  ovl_cross_lam(qa[lo], qa[k + k1 - lo]), tied, U->lo, U->hi))
-            continue;
-        ovl_tri_full(T);
-        ovl_tri_full(U);
-        c->xa[T->slot] ^= 1 << k; /* for ovl_resolve */
-        first = ovl_crossing_node(c, T, k, lo, p, qa, sa[k1], 0, first);
-        pd_v3 te = v3_scale(T->e[k], (pd_real)-sa[k1]); /* into U's solid; sa is +-1 */
-        ovl_crossing_cusps(c, p, te, T->m[k], T->nu, U->nu, 0);
-    }
-    /* edges of U through T */
-    for (int h = 0; h < 2; h++) {
-        int k = ovl_lone_edge(lb, h);
-        int k1 = (k + 1) % 3;
-        int i = U->id[k], j = U->id[k1];
-        int lo = i < j ? k : k1;
-        pd_v3 p = ovl_cross_point(U->p[lo], U->p[k + k1 - lo], qb[lo], qb[k + k1 - lo]);
-        int in =
-            ovl_point_in_tri(T, p, ovl_cross_err(c, U->p[k], U->p[k1], qb[k], qb[k1], T->ptol));
-        int tied = in == 0;
-        if (tied) in = ovl_tied_in(c, i, j, T->id, 1);
-        if (in != 1) continue;
-        /* rare: an edge nearly in the other's plane */
-        if (!ovl_in_box(c, p) &&
-            !ovl_crossing_outside(c, &p, U->p[lo], U->p[k + k1 - lo],
-                                  ovl_cross_lam(qb[lo], qb[k + k1 - lo]), tied, T->lo, T->hi))
-            continue;
-        ovl_tri_full(T);
-        ovl_tri_full(U);
-        c->xb[U->slot] ^= 1 << k;
-        first = ovl_crossing_node(c, U, k, lo, p, qb, sb[k1], 1, first);
-        pd_v3 te = v3_scale(U->e[k], (pd_real)-sb[k1]);
-        ovl_crossing_cusps(c, p, te, U->m[k], U->nu, T->nu, 1);
-    }
+    int first = ovl_edges_through(c, T, U, qa, sa, la, 0, -1); /* T's edges through U */
+    ovl_edges_through(c, U, T, qb, sb, lb, 1, first);          /* U's edges through T */
 }
 
 /* One pass of Algorithm 1 over the kept triangles, accumulating cusps. */
