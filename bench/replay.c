@@ -22,6 +22,7 @@
  * usage: build/bench/replay RESULT.h5 FROM TO [--above R] [--pair I J]
  */
 #define PD_DOUBLE 0
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -117,6 +118,134 @@ static int shapes_load(hid_t f, const char *path, int ns, replay_shapes *r)
     np_shapes t = {r->vert, r->tri, r->voff, r->toff, r->vt_off, r->vt, NULL, NULL, NULL};
     r->tables = t;
     return 0;
+}
+
+/*
+ * The pairs of a frame whose bounding spheres meet (cand, ascending key i n + j, i < j: the order
+ * the pairs were replayed in when every pair was tried), and the touching pairs with their last
+ * contact points, the previous frame's (prev, ascending) and this frame's (cur). A run of tens of
+ * thousands of particles replays in memory that grows with its contacts, not with n^2.
+ */
+typedef struct replay_pairs {
+    uint64_t *cand;
+    int ncand, cap_cand;
+    uint64_t *prev_key, *cur_key;
+    pd_v3 *prev_pt, *cur_pt;
+    int nprev, ncur, cap_touch;
+} replay_pairs;
+
+static void pairs_free(replay_pairs *p)
+{
+    free(p->cand);
+    free(p->prev_key);
+    free(p->cur_key);
+    free(p->prev_pt);
+    free(p->cur_pt);
+}
+
+static int cmp_u64(const void *a, const void *b)
+{
+    uint64_t x = *(const uint64_t *)a, y = *(const uint64_t *)b;
+    return (x > y) - (x < y);
+}
+
+/* sort_lo's keys: the particles are sorted by the low end of their spheres' x extents */
+static const double *sort_lo;
+static int cmp_lo(const void *a, const void *b)
+{
+    double x = sort_lo[*(const int *)a], y = sort_lo[*(const int *)b];
+    return (x > y) - (x < y);
+}
+
+/*
+ * Lists in p->cand every pair of polyhedra (analytic spheres are not replayed) whose bounding
+ * spheres meet, d^2 <= (r_i + r_j)^2 computed as it always was, by a sweep along x: such spheres'
+ * x extents overlap. order and lo hold n. Returns 0, or -1 out of memory.
+ */
+static int pairs_find(replay_pairs *p, const replay_shapes *rs, const int *pshape,
+                      const double *psize, const double *x, int n, int *order, double *lo)
+{
+    int m = 0;
+    for (int i = 0; i < n; i++) {
+        const shape *si = &rs->sh[pshape[i]];
+        if (si->sphere) continue;
+        lo[i] = x[3 * i] - si->radius * psize[i];
+        order[m++] = i;
+    }
+    sort_lo = lo;
+    qsort(order, (size_t)m, sizeof(int), cmp_lo);
+    p->ncand = 0;
+    for (int a = 0; a < m; a++) {
+        int i = order[a];
+        double ri = rs->sh[pshape[i]].radius * psize[i], hi = x[3 * i] + ri;
+        for (int b = a + 1; b < m && lo[order[b]] <= hi; b++) {
+            int j = order[b];
+            int u = i < j ? i : j, v = i < j ? j : i;
+            double d2 = 0,
+                   r = rs->sh[pshape[u]].radius * psize[u] + rs->sh[pshape[v]].radius * psize[v];
+            for (int c = 0; c < 3; c++)
+                d2 += (x[3 * u + c] - x[3 * v + c]) * (x[3 * u + c] - x[3 * v + c]);
+            if (d2 > r * r) continue;
+            if (p->ncand == p->cap_cand) {
+                int cap = p->cap_cand ? 2 * p->cap_cand : 1024;
+                uint64_t *c = realloc(p->cand, sizeof(uint64_t) * (size_t)cap);
+                if (!c) return -1;
+                p->cand = c;
+                p->cap_cand = cap;
+            }
+            p->cand[p->ncand++] = (uint64_t)u * (uint64_t)n + (uint64_t)v;
+        }
+    }
+    qsort(p->cand, (size_t)p->ncand, sizeof(uint64_t), cmp_u64);
+    /* this frame's touching pairs are at most its candidates */
+    if (p->ncand > p->cap_touch) {
+        uint64_t *k = realloc(p->cur_key, sizeof(uint64_t) * (size_t)p->ncand);
+        if (k) p->cur_key = k;
+        pd_v3 *pt = realloc(p->cur_pt, sizeof(pd_v3) * (size_t)p->ncand);
+        if (pt) p->cur_pt = pt;
+        uint64_t *k2 = realloc(p->prev_key, sizeof(uint64_t) * (size_t)p->ncand);
+        if (k2) p->prev_key = k2;
+        pd_v3 *pt2 = realloc(p->prev_pt, sizeof(pd_v3) * (size_t)p->ncand);
+        if (pt2) p->prev_pt = pt2;
+        if (!k || !pt || !k2 || !pt2) return -1;
+        p->cap_touch = p->ncand;
+    }
+    p->ncur = 0;
+    return 0;
+}
+
+/* The last contact point of pair key if it touched in the previous frame, else NULL. */
+static pd_v3 *pairs_last(replay_pairs *p, uint64_t key)
+{
+    int a = 0, b = p->nprev;
+    while (a < b) {
+        int h = a + (b - a) / 2;
+        if (p->prev_key[h] < key)
+            a = h + 1;
+        else
+            b = h;
+    }
+    return a < p->nprev && p->prev_key[a] == key ? &p->prev_pt[a] : NULL;
+}
+
+/* Pair key touches in this frame, at pt (called in ascending key order). */
+static void pairs_touch(replay_pairs *p, uint64_t key, pd_v3 pt)
+{
+    p->cur_key[p->ncur] = key;
+    p->cur_pt[p->ncur++] = pt;
+}
+
+/* This frame's touching pairs become the previous frame's. */
+static void pairs_next_frame(replay_pairs *p)
+{
+    uint64_t *k = p->prev_key;
+    pd_v3 *pt = p->prev_pt;
+    p->prev_key = p->cur_key;
+    p->prev_pt = p->cur_pt;
+    p->cur_key = k;
+    p->cur_pt = pt;
+    p->nprev = p->ncur;
+    p->ncur = 0;
 }
 
 static int usage(const char *prog)
@@ -226,8 +355,9 @@ int main(int argc, char **argv)
     replay_shapes rs;
     int rc = 1;
     double *x = malloc(sizeof(double) * 3 * (size_t)n), *q = malloc(sizeof(double) * 4 * (size_t)n);
-    pd_v3 *last = calloc((size_t)n * (size_t)n, sizeof(pd_v3));
-    char *touched = calloc((size_t)n * (size_t)n, 1);
+    replay_pairs pairs = {0};
+    int *order = malloc(sizeof(int) * (size_t)n);
+    double *lo = malloc(sizeof(double) * (size_t)n);
     int *iscr = NULL;
     float *rscr = NULL;
     if (ns > MAX_SHAPES) {
@@ -243,7 +373,7 @@ int main(int argc, char **argv)
                            ovl_places_rlen(cap));
     iscr = malloc(sizeof(int) * ilen);
     rscr = malloc(sizeof(float) * rlen);
-    if (!x || !q || !last || !touched || !iscr || !rscr) {
+    if (!x || !q || !order || !lo || !iscr || !rscr) {
         fprintf(stderr, "replay: out of memory\n");
         goto done;
     }
@@ -257,70 +387,66 @@ int main(int argc, char **argv)
                     path, fr);
             goto done;
         }
+        if (pairs_find(&pairs, &rs, pshape, psize, x, n, order, lo) < 0) {
+            fprintf(stderr, "replay: out of memory\n");
+            goto done;
+        }
         int ntouch = 0, bi = -1, bj = -1;
         double best = 0;
-        for (int i = 0; i < n; i++)
-            for (int j = i + 1; j < n; j++) {
-                const shape *si = &rs.sh[pshape[i]], *sj = &rs.sh[pshape[j]];
-                size_t key = (size_t)i * (size_t)n + (size_t)j;
-                double d2 = 0, r = si->radius * psize[i] + sj->radius * psize[j];
-                for (int c = 0; c < 3; c++)
-                    d2 += (x[3 * i + c] - x[3 * j + c]) * (x[3 * i + c] - x[3 * j + c]);
-                if (si->sphere || sj->sphere || d2 > r * r) {
-                    touched[key] = 0;
-                    continue;
-                }
-                np_body a, b;
-                a.x = v3((float)x[3 * i], (float)x[3 * i + 1], (float)x[3 * i + 2]);
-                b.x = v3((float)x[3 * j], (float)x[3 * j + 1], (float)x[3 * j + 2]);
-                for (int c = 0; c < 4; c++) {
-                    a.q[c] = (float)q[4 * i + c];
-                    b.q[c] = (float)q[4 * j + c];
-                }
-                a.size = (float)psize[i];
-                b.size = (float)psize[j];
-                a.shape = pshape[i];
-                b.shape = pshape[j];
-                ovl_in in;
-                float ra[9];
-                np_setup(&rs.tables, &a, &b, 0, &in, ra);
-                if (touched[key]) { /* as contact.cl: about last step's contact point */
-                    in.flags |= OVL_ORIGIN;
-                    in.org = np_to_body(&a, ra, last[key]);
-                }
-                in.iscr = iscr;
-                in.rscr = rscr;
-                in.pts_cap = cap;
-                if (i == pi && j == pj)
-                    printf("  pair %d %d, frame %ld: poses {%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, "
-                           "%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g}, last %d {%.9g, "
-                           "%.9g, %.9g} m\n",
-                           i, j, fr, (double)a.x.x, (double)a.x.y, (double)a.x.z, (double)a.q[0],
-                           (double)a.q[1], (double)a.q[2], (double)a.q[3], (double)b.x.x,
-                           (double)b.x.y, (double)b.x.z, (double)b.q[0], (double)b.q[1],
-                           (double)b.q[2], (double)b.q[3], touched[key], (double)last[key].x,
-                           (double)last[key].y, (double)last[key].z);
-                ovl_out o;
-                ovl_compute(&in, &o);
-                touched[key] = o.hit && o.depth_eff > 0;
-                if (!touched[key]) continue;
-                np_to_world(&a, ra, &o);
-                last[key] = o.point_eff;
-                ntouch++;
-                double ratio = o.depth_eff / (psize[i] < psize[j] ? psize[i] : psize[j]);
-                if (ratio > best) {
-                    best = ratio;
-                    bi = i;
-                    bj = j;
-                }
-                if ((above >= 0 && ratio > above) || (i == pi && j == pj))
-                    printf("  pair %d %d, frame %ld: depth / size %.6g, volume %.6g m^3, depth "
-                           "%.6g m, normal (%.6g, %.6g, %.6g), point (%.9g, %.9g, %.9g) m%s\n",
-                           i, j, fr, ratio, (double)o.vol_eff, (double)o.depth_eff,
-                           (double)o.normal.x, (double)o.normal.y, (double)o.normal.z,
-                           (double)o.point_eff.x, (double)o.point_eff.y, (double)o.point_eff.z,
-                           o.degenerate ? ", degenerate" : "");
+        for (int c = 0; c < pairs.ncand; c++) {
+            int i = (int)(pairs.cand[c] / (uint64_t)n), j = (int)(pairs.cand[c] % (uint64_t)n);
+            pd_v3 *last = pairs_last(&pairs, pairs.cand[c]); /* NULL: not touching before */
+            np_body a, b;
+            a.x = v3((float)x[3 * i], (float)x[3 * i + 1], (float)x[3 * i + 2]);
+            b.x = v3((float)x[3 * j], (float)x[3 * j + 1], (float)x[3 * j + 2]);
+            for (int c = 0; c < 4; c++) {
+                a.q[c] = (float)q[4 * i + c];
+                b.q[c] = (float)q[4 * j + c];
             }
+            a.size = (float)psize[i];
+            b.size = (float)psize[j];
+            a.shape = pshape[i];
+            b.shape = pshape[j];
+            ovl_in in;
+            float ra[9];
+            np_setup(&rs.tables, &a, &b, 0, &in, ra);
+            if (last) { /* as contact.cl: about last step's contact point */
+                in.flags |= OVL_ORIGIN;
+                in.org = np_to_body(&a, ra, *last);
+            }
+            in.iscr = iscr;
+            in.rscr = rscr;
+            in.pts_cap = cap;
+            if (i == pi && j == pj)
+                printf("  pair %d %d, frame %ld: poses {%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, "
+                       "%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g}, last %d {%.9g, "
+                       "%.9g, %.9g} m\n",
+                       i, j, fr, (double)a.x.x, (double)a.x.y, (double)a.x.z, (double)a.q[0],
+                       (double)a.q[1], (double)a.q[2], (double)a.q[3], (double)b.x.x, (double)b.x.y,
+                       (double)b.x.z, (double)b.q[0], (double)b.q[1], (double)b.q[2],
+                       (double)b.q[3], last != NULL, last ? (double)last->x : 0.0,
+                       last ? (double)last->y : 0.0, last ? (double)last->z : 0.0);
+            ovl_out o;
+            ovl_compute(&in, &o);
+            if (!(o.hit && o.depth_eff > 0)) continue;
+            np_to_world(&a, ra, &o);
+            pairs_touch(&pairs, pairs.cand[c], o.point_eff);
+            ntouch++;
+            double ratio = o.depth_eff / (psize[i] < psize[j] ? psize[i] : psize[j]);
+            if (ratio > best) {
+                best = ratio;
+                bi = i;
+                bj = j;
+            }
+            if ((above >= 0 && ratio > above) || (i == pi && j == pj))
+                printf("  pair %d %d, frame %ld: depth / size %.6g, volume %.6g m^3, depth "
+                       "%.6g m, normal (%.6g, %.6g, %.6g), point (%.9g, %.9g, %.9g) m%s\n",
+                       i, j, fr, ratio, (double)o.vol_eff, (double)o.depth_eff, (double)o.normal.x,
+                       (double)o.normal.y, (double)o.normal.z, (double)o.point_eff.x,
+                       (double)o.point_eff.y, (double)o.point_eff.z,
+                       o.degenerate ? ", degenerate" : "");
+        }
+        pairs_next_frame(&pairs);
         printf("frame %ld: %d touching pairs, largest depth / size %.6g (pair %d %d)\n", fr, ntouch,
                best, bi, bj);
     }
@@ -329,8 +455,9 @@ done:
     shapes_free(&rs);
     free(x);
     free(q);
-    free(last);
-    free(touched);
+    pairs_free(&pairs);
+    free(order);
+    free(lo);
     free(iscr);
     free(rscr);
     free(pshape);

@@ -64,29 +64,59 @@ static int fail(const char *fmt, const char *a, const char *b)
     return EXIT_USAGE;
 }
 
-/* Parses exactly n finite numbers separated by blanks or commas. */
-static int parse_numbers(const char *s, double *out, int n)
+/*
+ * Parses exactly n finite numbers separated by blanks or commas. Returns 0, or -1 with why in
+ * why[len] ("number 3 of 7, \"nan\", is not finite"). A number too small to hold, like 1e-320,
+ * is taken as the nearest representable one (strtod's ERANGE on underflow), not refused.
+ */
+static int parse_numbers(const char *s, double *out, int n, char *why, size_t len)
 {
     const char *p = s;
     for (int i = 0; i < n; i++) {
         while (*p == ' ' || *p == '\t' || *p == ',')
             p++;
+        if (!*p) {
+            snprintf(why, len, "got %d", i);
+            return -1;
+        }
         char *end;
         errno = 0;
         out[i] = strtod(p, &end);
-        if (end == p || errno == ERANGE || !isfinite(out[i])) return -1;
+        int tok = (int)strcspn(p, " \t,");
+        if (end == p) {
+            snprintf(why, len, "number %d of %d, \"%.*s\", is not a number", i + 1, n, tok, p);
+            return -1;
+        }
+        if (!isfinite(out[i]) || (errno == ERANGE && fabs(out[i]) > 1)) {
+            snprintf(why, len, "number %d of %d, \"%.*s\", is not finite", i + 1, n, (int)(end - p),
+                     p);
+            return -1;
+        }
         p = end;
     }
     while (*p == ' ' || *p == '\t' || *p == ',')
         p++;
-    return *p ? -1 : 0;
+    if (*p) {
+        char *end;
+        (void)strtod(p, &end);
+        if (end != p)
+            snprintf(why, len, "got more than %d", n);
+        else
+            snprintf(why, len, "\"%s\" after number %d is not a number", p, n);
+        return -1;
+    }
+    return 0;
 }
 
 static int parse_pose(const char *flag, const char *s, pd_pose *pose)
 {
     double v[7];
-    if (parse_numbers(s, v, 7) != 0)
-        return fail("%s: expected 7 numbers \"x y z qw qx qy qz\", got \"%s\"", flag, s);
+    char why[160];
+    if (parse_numbers(s, v, 7, why, sizeof why) != 0) {
+        fprintf(stderr, "polydem: %s: expected 7 numbers \"x y z qw qx qy qz\" (%s): \"%s\"\n",
+                flag, why, s);
+        return EXIT_USAGE;
+    }
     if (pd_quat_normalize(v + 3, pose->q) != PD_OK)
         return fail("%s: quaternion \"%s\" has zero length", flag, s);
     for (int k = 0; k < 3; k++)

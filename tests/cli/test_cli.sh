@@ -241,6 +241,17 @@ expect_fail open_mesh 2 "open edge" -- $POLYDEM overlap "$tmp/open.stl" builtin:
 expect_fail pose_too_few_numbers 2 "--pose-a" -- $POLYDEM overlap builtin:cube builtin:cube --pose-a "0 0 0 1 0 0"
 expect_fail pose_not_a_number 2 "--pose-b" -- $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 x 1 0 0 0"
 expect_fail zero_quaternion 2 "quaternion" -- $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 0 0 0 0 0"
+expect_fail pose_nan 2 'number 2 of 7, "nan", is not finite' -- $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 nan 0 1 0 0 0"
+expect_fail pose_overflow 2 'number 1 of 7, "1e999", is not finite' -- $POLYDEM overlap builtin:cube builtin:cube --pose-a "1e999 0 0 1 0 0 0"
+expect_fail pose_too_many_numbers 2 "got more than 7" -- $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 0 1 0 0 0 5"
+expect_fail pose_trailing_text 2 '"m" after number 7 is not a number' -- $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 0 1 0 0 0 m"
+# a coordinate too small to hold is the nearest one held (strtod's underflow), not an error:
+# 1e-320 m beside 0.5 m moves nothing, so the answer is the one for 0
+if $POLYDEM overlap builtin:cube builtin:cube --pose-b "1e-320 0 0.5 1 0 0 0" >"$tmp/sub" 2>&1 &&
+    $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 0.5 1 0 0 0" >"$tmp/sub0" 2>&1 &&
+    grep -q '"volume": 0.4999' "$tmp/sub" && cmp -s "$tmp/sub" "$tmp/sub0"; then
+    ok pose_subnormal_taken
+else bad pose_subnormal_taken "$(cat "$tmp/sub")"; fi
 expect_fail one_mesh_only 2 "two meshes" -- $POLYDEM overlap builtin:cube
 expect_fail unknown_option 2 "--bogus" -- $POLYDEM overlap builtin:cube builtin:cube --bogus
 expect_fail unknown_builtin 2 "dodecahedron" -- $POLYDEM mesh-info builtin:dodecahedron
