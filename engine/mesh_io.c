@@ -215,7 +215,6 @@ static int tok_double(const char *tok, size_t len, double *out)
     return end == tok + len;
 }
 
-/* Copies a token for an error message, at most 40 bytes, with unprintable bytes as '?'. */
 /* Reads the line's next three tokens as numbers; 0 when one is missing or not a number. */
 static int tok_vec3(line_toks *lt, double x[3])
 {
@@ -226,6 +225,7 @@ static int tok_vec3(line_toks *lt, double x[3])
     return 1;
 }
 
+/* Copies a token for an error message, at most 40 bytes, with unprintable bytes as '?'. */
 static const char *tok_show(const char *tok, size_t len, char buf[41])
 {
     size_t n = len > 40 ? 40 : len;
@@ -441,19 +441,63 @@ static int obj_polygon(const double *verts, const int *poly, size_t np, int *out
     return 0;
 }
 
+/*
+ * Where line [ls, le) continues on the next (OBJ's trailing backslash, as exporters write long
+ * faces): at its last character when that is a backslash followed only by blanks, and the line
+ * has no comment; else NULL.
+ */
+static const char *obj_continues(const char *ls, const char *le)
+{
+    if (memchr(ls, '#', (size_t)(le - ls))) return NULL;
+    while (le > ls && isspace((unsigned char)le[-1]))
+        le--;
+    return le > ls && le[-1] == '\\' ? le - 1 : NULL;
+}
+
+/*
+ * Joins a statement continued over lines (obj_continues) into *joined, NUL-terminated, with a
+ * blank for each backslash; *phys counts the lines taken. Returns its length, or -1 out of memory.
+ */
+static long obj_join(const char *ls, const char *le, const char **pos, const char *end, int *phys,
+                     char **joined, size_t *cap)
+{
+    size_t n = 0;
+    for (;;) {
+        const char *cut = obj_continues(ls, le), *hash = memchr(ls, '#', (size_t)(le - ls));
+        const char *stop = cut ? cut : hash ? hash : le;
+        size_t add = (size_t)(stop - ls);
+        if (grow((void **)joined, cap, n + add + 2, 1)) return -1;
+        memcpy(*joined + n, ls, add);
+        n += add;
+        (*joined)[n++] = ' ';
+        if (!cut || *pos >= end) break;
+        ls = next_line(pos, end, &le);
+        (*phys)++;
+    }
+    (*joined)[n] = '\0';
+    return (long)n;
+}
+
 static int parse_obj(const char *label, const char *buf, size_t len, pd_mesh **out, pd_error *err)
 {
     double *verts = NULL, *pscratch = NULL;
     int *tris = NULL, *poly = NULL;
-    size_t vcap = 0, tcap = 0, pcap = 0, scap = 0, nv = 0, nt = 0;
-    int lineno = 0, rc = PD_OK;
+    char *joined = NULL;
+    size_t vcap = 0, tcap = 0, pcap = 0, scap = 0, jcap = 0, nv = 0, nt = 0;
+    int lineno = 0, phys = 0, rc = PD_OK; /* lineno: where the statement starts, for messages */
     const char *pos = buf, *end = buf + len;
     while (pos < end) {
         const char *le, *ls = next_line(&pos, end, &le), *tok;
         size_t tl;
         const char *hash = memchr(ls, '#', (size_t)(le - ls));
         line_toks lt = {ls, hash ? hash : le};
-        lineno++;
+        lineno = ++phys;
+        if (obj_continues(ls, le)) {
+            long jn = obj_join(ls, le, &pos, end, &phys, &joined, &jcap);
+            if (jn < 0) goto oom;
+            lt.p = joined;
+            lt.end = joined + jn;
+        }
         if (!next_tok(&lt, &tok, &tl)) continue;
         if (tok_is(tok, tl, "v")) {
             double x[3];
@@ -511,6 +555,7 @@ static int parse_obj(const char *label, const char *buf, size_t len, pd_mesh **o
     }
     free(poly);
     free(pscratch);
+    free(joined);
     return mesh_finish(verts, (int)nv, tris, (int)nt, label, out, err);
 oom:
     rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory", label);
@@ -519,6 +564,7 @@ fail:
     free(tris);
     free(poly);
     free(pscratch);
+    free(joined);
     return rc;
 }
 

@@ -512,6 +512,31 @@ TEST(obj_quads_and_negative_indices)
     pd_mesh_destroy(m);
 }
 
+/* OBJ's trailing backslash continues a statement on the next line (exporters wrap long faces);
+ * a message names the line where the statement starts. */
+TEST(obj_statements_continued_over_lines)
+{
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    const char *text = "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv -0.5 0.5 -0.5\nv 0.5 0.5 -0.5\n"
+                       "v -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv -0.5 0.5 0.5\nv 0.5 0.5 \\\n0.5\n"
+                       "f 1 3 4 2\nf 5 6 8 \\ \r\n 7\nf 1 2 6 5\nf \\\n3 \\\n7 8 4\n"
+                       "f 1 5 7 3 # a comment, not a continuation \\\nf 2 4 8 6\\";
+    if (pd_mesh_load(write_text("wrapped.obj", text), &m, &err) != PD_OK) {
+        TEST_FAILF("%s", err.msg);
+        return;
+    }
+    CHECK_EQ_INT(12, m->ntris);
+    CHECK_EQ_INT(8, m->nverts);
+    CHECK_NEAR(1.0, props(m).volume, 1e-15);
+    pd_mesh_destroy(m);
+    m = NULL;
+    const char *bad = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 \\\n  4\n"
+                      "f 1 4 \\\n x\n";
+    CHECK_EQ_INT(PD_EMESH, pd_mesh_load(write_text("wrapped_bad.obj", bad), &m, &err));
+    CHECK_STR_CONTAINS(err.msg, "wrapped_bad.obj:8: bad face vertex 'x'");
+}
+
 TEST(inward_mesh_is_flipped)
 {
     int t[12 * 3];
@@ -1119,6 +1144,7 @@ int main(void)
     RUN(stl_round_trip);
     RUN(ascii_stl_loads);
     RUN(obj_quads_and_negative_indices);
+    RUN(obj_statements_continued_over_lines);
     RUN(inward_mesh_is_flipped);
     RUN(welding);
     RUN(shells_are_oriented_each);
