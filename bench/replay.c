@@ -126,21 +126,23 @@ static int shapes_load(hid_t f, const char *path, int ns, replay_shapes *r)
  * contact points, the previous frame's (prev, ascending) and this frame's (cur). A run of tens of
  * thousands of particles replays in memory that grows with its contacts, not with n^2.
  */
+typedef struct pair_touch {
+    uint64_t key;
+    pd_v3 pt; /* the contact point, world frame */
+} pair_touch;
+
 typedef struct replay_pairs {
     uint64_t *cand;
     int ncand, cap_cand;
-    uint64_t *prev_key, *cur_key;
-    pd_v3 *prev_pt, *cur_pt;
+    pair_touch *prev, *cur;
     int nprev, ncur, cap_touch;
 } replay_pairs;
 
 static void pairs_free(replay_pairs *p)
 {
     free(p->cand);
-    free(p->prev_key);
-    free(p->cur_key);
-    free(p->prev_pt);
-    free(p->cur_pt);
+    free(p->prev);
+    free(p->cur);
 }
 
 static int cmp_u64(const void *a, const void *b)
@@ -199,15 +201,11 @@ static int pairs_find(replay_pairs *p, const replay_shapes *rs, const int *pshap
     qsort(p->cand, (size_t)p->ncand, sizeof(uint64_t), cmp_u64);
     /* this frame's touching pairs are at most its candidates */
     if (p->ncand > p->cap_touch) {
-        uint64_t *k = realloc(p->cur_key, sizeof(uint64_t) * (size_t)p->ncand);
-        if (k) p->cur_key = k;
-        pd_v3 *pt = realloc(p->cur_pt, sizeof(pd_v3) * (size_t)p->ncand);
-        if (pt) p->cur_pt = pt;
-        uint64_t *k2 = realloc(p->prev_key, sizeof(uint64_t) * (size_t)p->ncand);
-        if (k2) p->prev_key = k2;
-        pd_v3 *pt2 = realloc(p->prev_pt, sizeof(pd_v3) * (size_t)p->ncand);
-        if (pt2) p->prev_pt = pt2;
-        if (!k || !pt || !k2 || !pt2) return -1;
+        pair_touch *cur = realloc(p->cur, sizeof(pair_touch) * (size_t)p->ncand);
+        if (cur) p->cur = cur;
+        pair_touch *prev = realloc(p->prev, sizeof(pair_touch) * (size_t)p->ncand);
+        if (prev) p->prev = prev;
+        if (!cur || !prev) return -1;
         p->cap_touch = p->ncand;
     }
     p->ncur = 0;
@@ -220,30 +218,27 @@ static pd_v3 *pairs_last(replay_pairs *p, uint64_t key)
     int a = 0, b = p->nprev;
     while (a < b) {
         int h = a + (b - a) / 2;
-        if (p->prev_key[h] < key)
+        if (p->prev[h].key < key)
             a = h + 1;
         else
             b = h;
     }
-    return a < p->nprev && p->prev_key[a] == key ? &p->prev_pt[a] : NULL;
+    return a < p->nprev && p->prev[a].key == key ? &p->prev[a].pt : NULL;
 }
 
 /* Pair key touches in this frame, at pt (called in ascending key order). */
 static void pairs_touch(replay_pairs *p, uint64_t key, pd_v3 pt)
 {
-    p->cur_key[p->ncur] = key;
-    p->cur_pt[p->ncur++] = pt;
+    p->cur[p->ncur].key = key;
+    p->cur[p->ncur++].pt = pt;
 }
 
 /* This frame's touching pairs become the previous frame's. */
 static void pairs_next_frame(replay_pairs *p)
 {
-    uint64_t *k = p->prev_key;
-    pd_v3 *pt = p->prev_pt;
-    p->prev_key = p->cur_key;
-    p->prev_pt = p->cur_pt;
-    p->cur_key = k;
-    p->cur_pt = pt;
+    pair_touch *t = p->prev;
+    p->prev = p->cur;
+    p->cur = t;
     p->nprev = p->ncur;
     p->ncur = 0;
 }
@@ -393,9 +388,10 @@ int main(int argc, char **argv)
         }
         int ntouch = 0, bi = -1, bj = -1;
         double best = 0;
-        for (int c = 0; c < pairs.ncand; c++) {
-            int i = (int)(pairs.cand[c] / (uint64_t)n), j = (int)(pairs.cand[c] % (uint64_t)n);
-            pd_v3 *last = pairs_last(&pairs, pairs.cand[c]); /* NULL: not touching before */
+        for (int k = 0; k < pairs.ncand; k++) {
+            uint64_t key = pairs.cand[k];
+            int i = (int)(key / (uint64_t)n), j = (int)(key % (uint64_t)n);
+            pd_v3 *last = pairs_last(&pairs, key); /* NULL: not touching before */
             np_body a, b;
             a.x = v3((float)x[3 * i], (float)x[3 * i + 1], (float)x[3 * i + 2]);
             b.x = v3((float)x[3 * j], (float)x[3 * j + 1], (float)x[3 * j + 2]);
@@ -430,7 +426,7 @@ int main(int argc, char **argv)
             ovl_compute(&in, &o);
             if (!(o.hit && o.depth_eff > 0)) continue;
             np_to_world(&a, ra, &o);
-            pairs_touch(&pairs, pairs.cand[c], o.point_eff);
+            pairs_touch(&pairs, key, o.point_eff);
             ntouch++;
             double ratio = o.depth_eff / (psize[i] < psize[j] ? psize[i] : psize[j]);
             if (ratio > best) {

@@ -442,13 +442,13 @@ static int obj_polygon(const double *verts, const int *poly, size_t np, int *out
 }
 
 /*
- * Where line [ls, le) continues on the next (OBJ's trailing backslash, as exporters write long
- * faces): at its last character when that is a backslash followed only by blanks, and the line
- * has no comment; else NULL.
+ * Where line [ls, le), whose comment starts at hash (NULL: none), continues on the next (OBJ's
+ * trailing backslash, as exporters write long faces): at its last character when that is a
+ * backslash followed only by blanks, and the line has no comment; else NULL.
  */
-static const char *obj_continues(const char *ls, const char *le)
+static const char *obj_continues(const char *ls, const char *le, const char *hash)
 {
-    if (memchr(ls, '#', (size_t)(le - ls))) return NULL;
+    if (hash) return NULL;
     while (le > ls && isspace((unsigned char)le[-1]))
         le--;
     return le > ls && le[-1] == '\\' ? le - 1 : NULL;
@@ -463,7 +463,7 @@ static long obj_join(const char *ls, const char *le, const char **pos, const cha
 {
     size_t n = 0;
     for (;;) {
-        const char *cut = obj_continues(ls, le), *hash = memchr(ls, '#', (size_t)(le - ls));
+        const char *hash = memchr(ls, '#', (size_t)(le - ls)), *cut = obj_continues(ls, le, hash);
         const char *stop = cut ? cut : hash ? hash : le;
         size_t add = (size_t)(stop - ls);
         if (grow((void **)joined, cap, n + add + 2, 1)) return -1;
@@ -492,7 +492,7 @@ static int parse_obj(const char *label, const char *buf, size_t len, pd_mesh **o
         const char *hash = memchr(ls, '#', (size_t)(le - ls));
         line_toks lt = {ls, hash ? hash : le};
         lineno = ++phys;
-        if (obj_continues(ls, le)) {
+        if (obj_continues(ls, le, hash)) {
             long jn = obj_join(ls, le, &pos, end, &phys, &joined, &jcap);
             if (jn < 0) goto oom;
             lt.p = joined;
