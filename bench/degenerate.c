@@ -66,7 +66,9 @@ static int trial(double scale, int turned)
     pd_mesh *ma = box(zero, bp.a), *mb = box(bp.lo, bp.hi);
     pd_pose p = {{0, 0, 0}, {1, 0, 0, 0}};
     if (turned) {
-        double q[4] = {1 + rnd(), rnd() - 0.5, rnd() - 0.5, rnd() - 0.5}, n = 0;
+        double q[4], n = 0; /* drawn in order: an initializer's order is unspecified */
+        for (int k = 0; k < 4; k++)
+            q[k] = rnd() + (k ? -0.5 : 1);
         for (int k = 0; k < 4; k++)
             n += q[k] * q[k];
         for (int k = 0; k < 4; k++)

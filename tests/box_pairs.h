@@ -45,10 +45,12 @@ static void box_pair_draw(box_pair *bp, double scale, double (*rnd)(void))
         int mode = (int)(rnd() * 4);
         double e = rnd() < 1.0 / 3 ? 0 : scale * (2 * rnd() - 1);
         double a = bp->a[k];
+        /* the shallow mode's two draws in order (operands' order is unspecified) */
+        double u = mode == 3 ? rnd() : 0;
         bp->lo[k] = mode == 0   ? a - 0.3 * rnd() * fmin(a, b[k])
                     : mode == 1 ? e
                     : mode == 2 ? a - b[k] + e
-                                : a - 1e-3 * rnd() + (rnd() < 0.2 ? e : 0);
+                                : a - 1e-3 * u + (rnd() < 0.2 ? e : 0);
         bp->hi[k] = bp->lo[k] + b[k];
     }
     box_pair_exact(bp);

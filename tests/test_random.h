@@ -29,6 +29,17 @@ static inline double rnd(void)
     return (double)(rnd64() >> 11) / 9007199254740992.0;
 }
 
+/*
+ * Three draws into v, in order. The arguments of one call and the operands of one expression are
+ * evaluated in an unspecified order, and gcc and clang take a call's in opposite orders:
+ * v3(rnd(), rnd(), rnd()) drew a different case under each compiler. Draw into variables first.
+ */
+static inline void rnd3(double v[3])
+{
+    for (int k = 0; k < 3; k++)
+        v[k] = rnd();
+}
+
 /* A random unit quaternion [w, x, y, z] (normalised from a random point of the 4-cube). */
 static inline void rnd_quat(double q[4])
 {

@@ -6,6 +6,7 @@
  * on the centroid, 1e-9 on the normal.
  */
 #define PD_DOUBLE 1
+#include <float.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -126,7 +127,9 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
     np_shapes sh = set.sh;
     np_body b[NBODY];
     for (int i = 0; i < NBODY; i++) {
-        b[i].x = v3(0.9 * rnd(), 0.9 * rnd(), 0.9 * rnd());
+        double r[3];
+        rnd3(r);
+        b[i].x = v3(0.9 * r[0], 0.9 * r[1], 0.9 * r[2]);
         rnd_quat(b[i].q);
         if (i % 6 == 5) memcpy(b[i].q, b[i - 1].q, sizeof b[i].q); /* some exactly aligned */
         b[i].size = 0.2 + 0.3 * rnd();
@@ -169,10 +172,20 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
             if (r.hit && o.hit) {
                 hits++;
                 double sz = b[i].size;
-                CHECK_REL(r.volume, o.volume, 1e-10);
-                CHECK_NEAR(r.centroid[0], o.centroid.x, 1e-10 * sz);
-                CHECK_NEAR(r.centroid[1], o.centroid.y, 1e-10 * sz);
-                CHECK_NEAR(r.centroid[2], o.centroid.z, 1e-10 * sz);
+                /*
+                 * The two sums are of simplices from A's centre (eq. 5.10), each up to A's reach
+                 * cubed, in frames rounded differently. A corner just pressed in sums to ~1e-8 of
+                 * its terms (overlap.h re-sums only below 2e-12), so its volume agrees only to a
+                 * few ulps of the terms: 64 eps R_a^3, and its centroid to that over V. The first
+                 * such pair drawn differed by 1.3e-18 m^3 (V 3.4e-10 m^3, 5.5e-4 m deep); a wrong
+                 * scale or pose is off by O(V).
+                 */
+                double ra = set.radius[b[i].shape] * sz, terms = 64 * DBL_EPSILON * ra * ra * ra;
+                double ctol = 1e-10 * sz + terms * 2 * ra / r.volume; /* (dM + c dV) / V */
+                CHECK_NEAR(r.volume, o.volume, 1e-10 * r.volume + terms);
+                CHECK_NEAR(r.centroid[0], o.centroid.x, ctol);
+                CHECK_NEAR(r.centroid[1], o.centroid.y, ctol);
+                CHECK_NEAR(r.centroid[2], o.centroid.z, ctol);
                 CHECK_NEAR(r.normal[0], o.normal.x, 1e-9);
                 CHECK_NEAR(r.normal[1], o.normal.y, 1e-9);
                 CHECK_NEAR(r.normal[2], o.normal.z, 1e-9);
@@ -286,9 +299,12 @@ TEST(separation_gaps_are_lower_bounds)
         b.size = 0.2 + 0.3 * rnd();
         rnd_quat(a.q);
         rnd_quat(b.q);
-        a.x = v3(0.3 * rnd(), 0.3 * rnd(), 0.3 * rnd());
+        double r[3];
+        rnd3(r);
+        a.x = v3(0.3 * r[0], 0.3 * r[1], 0.3 * r[2]);
         /* bounding spheres overlapping: the pairs the contact stage computes */
-        pd_v3 d = v3_unit(v3(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5));
+        rnd3(r);
+        pd_v3 d = v3_unit(v3(r[0] - 0.5, r[1] - 0.5, r[2] - 0.5));
         double reach = set.radius[a.shape] * a.size + set.radius[b.shape] * b.size;
         b.x = v3_add(a.x, v3_scale(d, reach * (0.55 + 0.45 * rnd())));
         if (overlaps(&set.sh, &a, &b, iscr, rscr, cap)) continue;
@@ -308,7 +324,9 @@ TEST(separation_gaps_are_lower_bounds)
         if (!(g > 0)) continue;
         for (int k = 0; k < 24; k++) {
             np_body c = b;
-            pd_v3 u = v3_unit(v3(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5));
+            double r[3];
+            rnd3(r);
+            pd_v3 u = v3_unit(v3(r[0] - 0.5, r[1] - 0.5, r[2] - 0.5));
             c.x = v3_add(b.x, v3_scale(u, 0.999 * g));
             int hit = overlaps(&set.sh, &a, &c, iscr, rscr, cap);
             CHECK(!hit);
@@ -381,9 +399,12 @@ TEST(clustered_narrow_phase_matches_unclustered)
         c->size = 0.2 + 0.3 * rnd();
         rnd_quat(a->q);
         rnd_quat(c->q);
-        a->x = v3(rnd(), rnd(), rnd());
+        double r[3];
+        rnd3(r);
+        a->x = v3(r[0], r[1], r[2]);
         /* centres about a size apart: shallow overlaps, the DEM's, and near misses */
-        pd_v3 d = v3_unit(v3(rnd() - 0.5, rnd() - 0.5, rnd() - 0.5));
+        rnd3(r);
+        pd_v3 d = v3_unit(v3(r[0] - 0.5, r[1] - 0.5, r[2] - 0.5));
         c->x = v3_add(a->x, v3_scale(d, 0.5 * (a->size + c->size) * (0.85 + 0.2 * rnd())));
         ovl_out o;
         np_host(&plain, a, c, iscr, rscr, cap, &o, ref + 12 * p);

@@ -1009,7 +1009,8 @@ TEST(rock_against_closed_wall_mesh)
     for (int trial = 0; trial < 10; trial++) {
         double q[4], Ra[3][3], I[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
         rnd_quat(q);
-        pd_pose pa = pose(0.2 * rnd(), 0.2 * rnd(), 0.35 + 0.1 * rnd(), q[0], q[1], q[2], q[3]);
+        double u0 = rnd(), u1 = rnd(), u2 = rnd(); /* in order: a call's is unspecified */
+        pd_pose pa = pose(0.2 * u0, 0.2 * u1, 0.35 + 0.1 * u2, q[0], q[1], q[2], q[3]);
         pd_contact r = overlap(rock, pa, wall, ORIGIN, 0);
         pd_quat_to_matrix(pa.q, Ra);
         double o[3] = {0, 0, -1};

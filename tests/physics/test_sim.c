@@ -1692,21 +1692,24 @@ static void momentum_is_conserved(const char *label, const char *materials, cons
         for (int i = g; i < MC_N; i += nshapes) {
             /* on a jittered 3 x 3 x 3 lattice of pitch 0.016 m (less its centre), sizes 8-12 mm */
             int c = i + (i >= 13);
-            double x[3] = {0.016 * (c % 3 - 1) + 0.002 * (rnd() - 0.5),
-                           0.016 * (c / 3 % 3 - 1) + 0.002 * (rnd() - 0.5),
-                           0.016 * (c / 9 - 1) + 0.002 * (rnd() - 0.5)},
-                   q[4], w[3], s = 0.008 + 0.004 * rnd();
+            double x[3], q[4], w[3], v[3];
+            rnd3(x);
+            x[0] = 0.016 * (c % 3 - 1) + 0.002 * (x[0] - 0.5);
+            x[1] = 0.016 * (c / 3 % 3 - 1) + 0.002 * (x[1] - 0.5);
+            x[2] = 0.016 * (c / 9 - 1) + 0.002 * (x[2] - 0.5);
+            double s = 0.008 + 0.004 * rnd();
             rnd_quat(q);
             for (int k = 0; k < 3; k++)
                 w[k] = 200 * (rnd() - 0.5);
+            for (int k = 0; k < 3; k++)
+                v[k] = vr * x[k] + 0.3 * (rnd() - 0.5);
             len += (size_t)snprintf(
                 parts + len, sizeof parts - len,
                 "%s{\"position\": [%.17g, %.17g, %.17g], \"orientation\": [%.17g, %.17g, %.17g, "
                 "%.17g], \"velocity\": [%.17g, %.17g, %.17g], \"angular_velocity\": [%.17g, "
                 "%.17g, %.17g], \"size\": %.17g}",
-                i >= nshapes ? ", " : "", x[0], x[1], x[2], q[0], q[1], q[2], q[3],
-                vr * x[0] + 0.3 * (rnd() - 0.5), vr * x[1] + 0.3 * (rnd() - 0.5),
-                vr * x[2] + 0.3 * (rnd() - 0.5), w[0], w[1], w[2], s);
+                i >= nshapes ? ", " : "", x[0], x[1], x[2], q[0], q[1], q[2], q[3], v[0], v[1],
+                v[2], w[0], w[1], w[2], s);
         }
         len += (size_t)snprintf(parts + len, sizeof parts - len, "]}");
     }

@@ -149,7 +149,10 @@ TEST(random_boxes_of_varied_size)
     int n = 2000;
     double *b = malloc(sizeof(double) * 6 * n);
     for (int i = 0; i < n; i++) {
-        double c[3] = {rnd(), rnd(), 0.3 * rnd()}, h = 0.001 * pow(100, rnd()); /* 1e-3..0.1 */
+        double c[3];
+        rnd3(c);
+        c[2] *= 0.3;
+        double h = 0.001 * pow(100, rnd()); /* 1e-3..0.1 */
         for (int k = 0; k < 3; k++) {
             b[6 * i + k] = c[k] - h;
             b[6 * i + 3 + k] = c[k] + h;
@@ -188,7 +191,9 @@ TEST(float_boxes_keep_touching_spheres)
     int kept = 0, dropped = 0, far_tested = 0, n = 20000;
     for (int i = 0; i < n; i++) {
         double scale = pow(10, 3 * rnd()); /* 1 m .. 1 km from the origin */
-        pd_v3 ca = v3(scale * (2 * rnd() - 1), scale * (2 * rnd() - 1), scale * (2 * rnd() - 1));
+        double r[3];
+        rnd3(r);
+        pd_v3 ca = v3(scale * (2 * r[0] - 1), scale * (2 * r[1] - 1), scale * (2 * r[2] - 1));
         double ra = 1e-3 * pow(100, rnd()), rb = 1e-3 * pow(100, rnd());
         double u[3];
         do {
