@@ -139,9 +139,18 @@ static void json_str(const char *s)
     putchar('"');
 }
 
+/* Three numbers as a JSON array. Adding 0 turns -0 into 0: a cube's products of inertia and
+ * other exact zeros came out as "-0", correct JSON that reads as a defect. */
+static void print_row(const double *v)
+{
+    printf("[%.17g, %.17g, %.17g]", v[0] + 0.0, v[1] + 0.0, v[2] + 0.0);
+}
+
 static void print_vec(const char *key, const double *v, int last)
 {
-    printf("\"%s\": [%.17g, %.17g, %.17g]%s", key, v[0], v[1], v[2], last ? "" : ", ");
+    printf("\"%s\": ", key);
+    print_row(v);
+    printf("%s", last ? "" : ", ");
 }
 
 static int cmd_overlap(int argc, char **argv)
@@ -255,15 +264,16 @@ static int cmd_mesh_info(int argc, char **argv)
     print_vec("centroid", mp.centroid, 0);
     printf("\"inertia\": [");
     for (int i = 0; i < 3; i++) {
-        printf("[%.17g, %.17g, %.17g]%s", mp.inertia[i][0], mp.inertia[i][1], mp.inertia[i][2],
-               i < 2 ? ", " : "");
+        print_row(mp.inertia[i]);
+        printf("%s", i < 2 ? ", " : "");
     }
     printf("], ");
     print_vec("principal_moments", mp.principal, 0);
     printf("\"principal_axes\": [");
-    for (int i = 0; i < 3; i++)
-        printf("[%.17g, %.17g, %.17g]%s", mp.axes[i][0], mp.axes[i][1], mp.axes[i][2],
-               i < 2 ? ", " : "");
+    for (int i = 0; i < 3; i++) {
+        print_row(mp.axes[i]);
+        printf("%s", i < 2 ? ", " : "");
+    }
     printf("], ");
     print_vec("bbox_min", lo, 0);
     print_vec("bbox_max", hi, 0);
