@@ -820,8 +820,11 @@ static int close_file(rh5_writer *w)
         if (close_ext(&w->fr[k]) < 0) ok = 0;
     for (int k = 0; k < NSTATS_DS; k++)
         if (close_ext(&w->st[k]) < 0) ok = 0;
-    for (int i = 0; i < w->nwalls; i++)
-        if ((close_ext(&w->walls[i].force) < 0) | (close_ext(&w->walls[i].frame) < 0)) ok = 0;
+    for (int i = 0; i < w->nwalls; i++) {
+        /* both, whatever the first gives */
+        if (close_ext(&w->walls[i].force) < 0) ok = 0;
+        if (close_ext(&w->walls[i].frame) < 0) ok = 0;
+    }
     for (int k = 0; k < RH5_NSTAGES; k++)
         if (close_ext(&w->stage[k]) < 0) ok = 0;
     if (w->file >= 0 && H5Fclose(w->file) < 0) {
