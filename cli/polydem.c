@@ -82,9 +82,9 @@ static int parse_numbers(const char *s, double *out, int n, char *why, size_t le
         char *end;
         errno = 0;
         out[i] = strtod(p, &end);
-        int tok = (int)strcspn(p, " \t,");
         if (end == p) {
-            snprintf(why, len, "number %d of %d, \"%.*s\", is not a number", i + 1, n, tok, p);
+            snprintf(why, len, "number %d of %d, \"%.*s\", is not a number", i + 1, n,
+                     (int)strcspn(p, " \t,"), p);
             return -1;
         }
         if (!isfinite(out[i]) || (errno == ERANGE && fabs(out[i]) > 1)) {
@@ -151,6 +151,17 @@ static void print_vec(const char *key, const double *v, int last)
     printf("\"%s\": ", key);
     print_row(v);
     printf("%s", last ? "" : ", ");
+}
+
+/* A 3 x 3 matrix as a JSON array of its rows, followed by ", ". */
+static void print_matrix(const char *key, const double m[3][3])
+{
+    printf("\"%s\": [", key);
+    for (int i = 0; i < 3; i++) {
+        print_row(m[i]);
+        printf("%s", i < 2 ? ", " : "");
+    }
+    printf("], ");
 }
 
 static int cmd_overlap(int argc, char **argv)
@@ -262,19 +273,9 @@ static int cmd_mesh_info(int argc, char **argv)
     printf("\"volume\": %.17g, ", mp.volume);
     printf("\"equivalent_diameter\": %.17g, ", cbrt(6.0 * mp.volume / 3.14159265358979323846));
     print_vec("centroid", mp.centroid, 0);
-    printf("\"inertia\": [");
-    for (int i = 0; i < 3; i++) {
-        print_row(mp.inertia[i]);
-        printf("%s", i < 2 ? ", " : "");
-    }
-    printf("], ");
+    print_matrix("inertia", mp.inertia);
     print_vec("principal_moments", mp.principal, 0);
-    printf("\"principal_axes\": [");
-    for (int i = 0; i < 3; i++) {
-        print_row(mp.axes[i]);
-        printf("%s", i < 2 ? ", " : "");
-    }
-    printf("], ");
+    print_matrix("principal_axes", mp.axes);
     print_vec("bbox_min", lo, 0);
     print_vec("bbox_max", hi, 0);
     printf("\"units\": {\"volume\": \"m^3\", \"centroid\": \"m\", \"equivalent_diameter\": \"m\", "

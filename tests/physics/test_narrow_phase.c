@@ -127,9 +127,9 @@ TEST(pairs_match_overlap_of_posed_scaled_meshes)
     np_shapes sh = set.sh;
     np_body b[NBODY];
     for (int i = 0; i < NBODY; i++) {
-        double r[3];
-        rnd3(r);
-        b[i].x = v3(0.9 * r[0], 0.9 * r[1], 0.9 * r[2]);
+        double draw[3];
+        rnd3(draw);
+        b[i].x = v3(0.9 * draw[0], 0.9 * draw[1], 0.9 * draw[2]);
         rnd_quat(b[i].q);
         if (i % 6 == 5) memcpy(b[i].q, b[i - 1].q, sizeof b[i].q); /* some exactly aligned */
         b[i].size = 0.2 + 0.3 * rnd();
@@ -299,12 +299,12 @@ TEST(separation_gaps_are_lower_bounds)
         b.size = 0.2 + 0.3 * rnd();
         rnd_quat(a.q);
         rnd_quat(b.q);
-        double r[3];
-        rnd3(r);
-        a.x = v3(0.3 * r[0], 0.3 * r[1], 0.3 * r[2]);
+        double draw[3];
+        rnd3(draw);
+        a.x = v3(0.3 * draw[0], 0.3 * draw[1], 0.3 * draw[2]);
         /* bounding spheres overlapping: the pairs the contact stage computes */
-        rnd3(r);
-        pd_v3 d = v3_unit(v3(r[0] - 0.5, r[1] - 0.5, r[2] - 0.5));
+        rnd3(draw);
+        pd_v3 d = v3_unit(v3(draw[0] - 0.5, draw[1] - 0.5, draw[2] - 0.5));
         double reach = set.radius[a.shape] * a.size + set.radius[b.shape] * b.size;
         b.x = v3_add(a.x, v3_scale(d, reach * (0.55 + 0.45 * rnd())));
         if (overlaps(&set.sh, &a, &b, iscr, rscr, cap)) continue;
@@ -324,9 +324,9 @@ TEST(separation_gaps_are_lower_bounds)
         if (!(g > 0)) continue;
         for (int k = 0; k < 24; k++) {
             np_body c = b;
-            double r[3];
-            rnd3(r);
-            pd_v3 u = v3_unit(v3(r[0] - 0.5, r[1] - 0.5, r[2] - 0.5));
+            double draw[3];
+            rnd3(draw);
+            pd_v3 u = v3_unit(v3(draw[0] - 0.5, draw[1] - 0.5, draw[2] - 0.5));
             c.x = v3_add(b.x, v3_scale(u, 0.999 * g));
             int hit = overlaps(&set.sh, &a, &c, iscr, rscr, cap);
             CHECK(!hit);
@@ -399,12 +399,12 @@ TEST(clustered_narrow_phase_matches_unclustered)
         c->size = 0.2 + 0.3 * rnd();
         rnd_quat(a->q);
         rnd_quat(c->q);
-        double r[3];
-        rnd3(r);
-        a->x = v3(r[0], r[1], r[2]);
+        double draw[3];
+        rnd3(draw);
+        a->x = v3(draw[0], draw[1], draw[2]);
         /* centres about a size apart: shallow overlaps, the DEM's, and near misses */
-        rnd3(r);
-        pd_v3 d = v3_unit(v3(r[0] - 0.5, r[1] - 0.5, r[2] - 0.5));
+        rnd3(draw);
+        pd_v3 d = v3_unit(v3(draw[0] - 0.5, draw[1] - 0.5, draw[2] - 0.5));
         c->x = v3_add(a->x, v3_scale(d, 0.5 * (a->size + c->size) * (0.85 + 0.2 * rnd())));
         ovl_out o;
         np_host(&plain, a, c, iscr, rscr, cap, &o, ref + 12 * p);

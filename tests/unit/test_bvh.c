@@ -191,9 +191,10 @@ TEST(float_boxes_keep_touching_spheres)
     int kept = 0, dropped = 0, far_tested = 0, n = 20000;
     for (int i = 0; i < n; i++) {
         double scale = pow(10, 3 * rnd()); /* 1 m .. 1 km from the origin */
-        double r[3];
-        rnd3(r);
-        pd_v3 ca = v3(scale * (2 * r[0] - 1), scale * (2 * r[1] - 1), scale * (2 * r[2] - 1));
+        double draw[3];
+        rnd3(draw);
+        pd_v3 ca =
+            v3(scale * (2 * draw[0] - 1), scale * (2 * draw[1] - 1), scale * (2 * draw[2] - 1));
         double ra = 1e-3 * pow(100, rnd()), rb = 1e-3 * pow(100, rnd());
         double u[3];
         do {
