@@ -456,23 +456,28 @@ static const char *obj_continues(const char *ls, const char *le, const char *has
 
 /*
  * Joins a statement continued over lines (obj_continues) into *joined, NUL-terminated, with a
- * blank for each backslash; *phys counts the lines taken. Returns its length, or -1 out of memory.
+ * blank for each backslash; its first line [ls, cut) is the caller's, which has found where it
+ * continues (cut), and *phys counts the lines taken after it. Returns its length, or -1 out of
+ * memory.
  */
-static long obj_join(const char *ls, const char *le, const char **pos, const char *end, int *phys,
+static long obj_join(const char *ls, const char *cut, const char **pos, const char *end, int *phys,
                      char **joined, size_t *cap)
 {
     size_t n = 0;
+    const char *stop = cut;
     for (;;) {
-        const char *hash = memchr(ls, '#', (size_t)(le - ls)), *cut = obj_continues(ls, le, hash);
-        const char *stop = cut ? cut : hash ? hash : le;
         size_t add = (size_t)(stop - ls);
         if (grow((void **)joined, cap, n + add + 2, 1)) return -1;
         memcpy(*joined + n, ls, add);
         n += add;
         (*joined)[n++] = ' ';
         if (!cut || *pos >= end) break;
+        const char *le;
         ls = next_line(pos, end, &le);
         (*phys)++;
+        const char *hash = memchr(ls, '#', (size_t)(le - ls));
+        cut = obj_continues(ls, le, hash);
+        stop = cut ? cut : hash ? hash : le;
     }
     (*joined)[n] = '\0';
     return (long)n;
@@ -492,8 +497,9 @@ static int parse_obj(const char *label, const char *buf, size_t len, pd_mesh **o
         const char *hash = memchr(ls, '#', (size_t)(le - ls));
         line_toks lt = {ls, hash ? hash : le};
         lineno = ++phys;
-        if (obj_continues(ls, le, hash)) {
-            long jn = obj_join(ls, le, &pos, end, &phys, &joined, &jcap);
+        const char *cut = obj_continues(ls, le, hash);
+        if (cut) {
+            long jn = obj_join(ls, cut, &pos, end, &phys, &joined, &jcap);
             if (jn < 0) goto oom;
             lt.p = joined;
             lt.end = joined + jn;
