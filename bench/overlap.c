@@ -12,8 +12,11 @@
  * median of five rounds that time the two spheres back to back.
  *
  * usage: build/bench/overlap [--quick] [--no-opencl] [--no-filter-off] [--only SHAPE] [--reps N]
+ *                            [--digest]
  * --reps N runs exactly N passes over the configurations (for instruction counts under
- * valgrind --tool=callgrind, which repeat exactly where wall time does not).
+ * valgrind --tool=callgrind, which repeat exactly where wall time does not). --digest prints,
+ * per shape, a digest of every configuration's host result (filter on): a change meant to make
+ * the overlap faster without changing its answers shows the same digests as the build before it.
  */
 #define PD_DOUBLE 1
 /* the engine's overlap as its kernels run it by default, without separate places */
@@ -117,10 +120,24 @@ static int cmp_double(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
-/* Host timing: ns per overlap over all configs, repeated for at least min_time seconds. */
+/* FNV-1a over the bytes of what a contact takes from a result, in a fixed order. */
+static uint64_t digest_result(uint64_t h, const ovl_out *o)
+{
+    double f[12] = {o->volume,   o->centroid.x, o->centroid.y, o->centroid.z,
+                    o->normal.x, o->normal.y,   o->normal.z,   o->depth,
+                    o->vol_eff,  o->depth_eff,  o->hit,        o->degenerate};
+    const unsigned char *b = (const unsigned char *)f;
+    for (size_t i = 0; i < sizeof f; i++)
+        h = (h ^ b[i]) * 0x100000001b3ull;
+    return h;
+}
+
+/* Host timing: ns per overlap over all configs, repeated for at least min_time seconds. With
+ * digest, the first pass's results are folded into *digest. */
 static long fixed_reps = 0;
 
-static double time_host(configs *cf, int n, int flags, double min_time, double *kept)
+static double time_host(configs *cf, int n, int flags, double min_time, double *kept,
+                        uint64_t *digest)
 {
     ovl_setup *s0 = &cf->s[0];
     int cap = ovl_pts_cap(s0->nta, s0->ntb);
@@ -148,6 +165,7 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
         for (int i = 0; i < n; i++) {
             ovl_out o;
             ovl_compute(&in[i], &o);
+            if (digest && reps == 0) *digest = digest_result(*digest, &o);
             sink += o.volume;
             kept_sum += o.kept_a + o.kept_b;
         }
@@ -216,7 +234,7 @@ static double time_cl(pd_device *dev, configs *cf, int n, int dbl, int batch, do
 
 int main(int argc, char **argv)
 {
-    int quick = 0, use_cl = 1, skip_off = 0;
+    int quick = 0, use_cl = 1, skip_off = 0, want_digest = 0;
     const char *only = NULL;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick"))
@@ -229,11 +247,13 @@ int main(int argc, char **argv)
             fixed_reps = atol(argv[++i]);
         else if (!strcmp(argv[i], "--only") && i + 1 < argc)
             only = argv[++i];
+        else if (!strcmp(argv[i], "--digest"))
+            want_digest = 1;
         else {
-            fprintf(
-                stderr,
-                "usage: %s [--quick] [--no-opencl] [--no-filter-off] [--only SHAPE] [--reps N]\n",
-                argv[0]);
+            fprintf(stderr,
+                    "usage: %s [--quick] [--no-opencl] [--no-filter-off] [--only SHAPE] [--reps N] "
+                    "[--digest]\n",
+                    argv[0]);
             return 2;
         }
     }
@@ -267,6 +287,7 @@ int main(int argc, char **argv)
     static configs cfs[NSHAPE];
     pd_mesh *meshes[NSHAPE] = {NULL};
     int nconf[NSHAPE] = {0}, k80 = -1, k1280 = -1;
+    uint64_t digest[NSHAPE];
     double t80 = 0, t1280 = 0;
     for (int k = 0; k < NSHAPE; k++) {
         pd_mesh *m = NULL;
@@ -285,8 +306,9 @@ int main(int argc, char **argv)
             return 1;
         }
         double kept_on, kept_off;
-        double on = time_host(cf, n, 0, min_time, &kept_on);
-        double off = skip_off ? -1 : time_host(cf, n, OVL_NO_FILTER, min_time, &kept_off);
+        digest[k] = 0xcbf29ce484222325ull; /* FNV-1a's offset basis */
+        double on = time_host(cf, n, 0, min_time, &kept_on, want_digest ? &digest[k] : NULL);
+        double off = skip_off ? -1 : time_host(cf, n, OVL_NO_FILTER, min_time, &kept_off, NULL);
         double cld = -1, clf = -1;
         int batch = 0;
         if (use_cl) {
@@ -324,14 +346,21 @@ int main(int argc, char **argv)
         enum { ROUNDS = 5 };
         double r[ROUNDS], kept;
         for (int k = 0; k < ROUNDS; k++) {
-            double a = time_host(&cfs[k80], nconf[k80], 0, min_time / 2, &kept);
-            double b = time_host(&cfs[k1280], nconf[k1280], 0, min_time / 2, &kept);
+            double a = time_host(&cfs[k80], nconf[k80], 0, min_time / 2, &kept, NULL);
+            double b = time_host(&cfs[k1280], nconf[k1280], 0, min_time / 2, &kept, NULL);
             r[k] = b / a;
         }
         qsort(r, ROUNDS, sizeof *r, cmp_double);
         printf("\nicosphere 1280 / 80 host time ratio (filter on): %.2f; median of %d rounds "
                "timing both back to back: %.2f (%.2f-%.2f)\n",
                t1280 / t80, ROUNDS, r[ROUNDS / 2], r[0], r[ROUNDS - 1]);
+    }
+    if (want_digest) {
+        printf("\n");
+        for (int k = 0; k < NSHAPE; k++)
+            if (nconf[k] > 0)
+                printf("# digest of the host results, %s %d: %016llx (%d configurations)\n",
+                       shapes[k].name, meshes[k]->ntris, (unsigned long long)digest[k], nconf[k]);
     }
     for (int k = 0; k < NSHAPE; k++) {
         for (int i = 0; i < nconf[k]; i++)
