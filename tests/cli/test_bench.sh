@@ -116,13 +116,13 @@ expect_fail stats_rows_bad_count 2 "usage" -- sh bench/stats_rows.sh 12x
 # of A's vertices, which the timing shares, are equal
 OVERLAP=${POLYDEM%/polydem}/bench/overlap
 if "$OVERLAP" --quick --no-opencl --only schonhardt --reps 1 >"$tmp/ov" 2>&1 &&
-    grep -Eq '^\| schonhardt \| 8 \| [0-9.]+ \| [0-9]+ \|' "$tmp/ov"; then
+    grep -Eq '^\| schonhardt \| 8 \| [0-9.]+ \| [0-9]+ \|' "$tmp/ov" && ! grep -q digest "$tmp/ov"; then
     ok overlap_bench_runs
 else bad overlap_bench_runs "$(cat "$tmp/ov")"; fi
 expect_fail overlap_bench_bad_arg 2 "usage" -- "$OVERLAP" --frobnicate
 # the 1280 / 80 ratio from the rows and from five back-to-back rounds: the median lies in the
 # range printed with it, and a 1280-triangle pair costs more than an 80-triangle one (~4.5x)
-if "$OVERLAP" --quick --no-opencl --no-filter-off --reps 1 >"$tmp/ov" 2>&1 &&
+if "$OVERLAP" --quick --no-opencl --no-filter-off --reps 1 --digest >"$tmp/ov" 2>&1 &&
     awk '/^icosphere 1280 \/ 80 host time ratio/ {
         n = split($0, w, /[^0-9.]+/); k = 0
         for (i = 1; i <= n; i++) if (w[i] != "") v[++k] = w[i] + 0
@@ -131,4 +131,15 @@ if "$OVERLAP" --quick --no-opencl --no-filter-off --reps 1 >"$tmp/ov" 2>&1 &&
         END { exit found ? 0 : 1 }' "$tmp/ov"; then
     ok overlap_bench_ratio_rounds
 else bad overlap_bench_ratio_rounds "$(tail -n 2 "$tmp/ov")"; fi
+# --digest (the same run): a line per shape, each a 16-digit hex digest of that shape's results,
+# all different and none FNV-1a's starting value (nothing hashed); a second run of one shape
+# places the same configurations and gets the same answers, so the same digest
+grep '^# digest of the host results' "$tmp/ov" >"$tmp/dg"
+if [ "$(grep -Ec ': [0-9a-f]{16} \(1024 configurations\)$' "$tmp/dg")" -eq 5 ] &&
+    [ "$(awk '{print $(NF-2)}' "$tmp/dg" | sort -u | grep -vc cbf29ce484222325)" -eq 5 ] &&
+    "$OVERLAP" --quick --no-opencl --no-filter-off --only schonhardt --reps 1 --digest >"$tmp/ov1" 2>&1 &&
+    grep '^# digest of the host results, schonhardt 8:' "$tmp/ov1" >"$tmp/dg1" &&
+    grep -qxF "$(cat "$tmp/dg1")" "$tmp/dg"; then
+    ok overlap_bench_digest
+else bad overlap_bench_digest "$(cat "$tmp/dg") / $(cat "$tmp/ov1" 2>/dev/null | tail -n 1)"; fi
 done_tests
