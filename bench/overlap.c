@@ -6,13 +6,17 @@
  * placed by bisection so that the overlap depth is 1 % of the volume-equivalent diameter, then
  * times the overlap kernel's own code on one host core (double precision, scratch preallocated as
  * the engine will) with the half-plane filter on and off, and the OpenCL kernel on the default
- * device for a batch of pairs (one work-item per pair, buffers and transfers included). The
- * configurations of a shape share its vertex and table arrays, as a simulation's particles do.
+ * device for a batch of pairs (one work-item per pair, buffers and transfers included), whose
+ * double-precision results are then checked against the host's (to 1e-12, the issue's contract;
+ * exit status 1 where one disagrees). The configurations of a shape share its vertex and table
+ * arrays, as a simulation's particles do.
  * Issue 2's icosphere 1280 / 80 ratio is printed from the table's rows and, steadier, as the
  * median of five rounds that time the two spheres back to back.
  *
- * usage: build/bench/overlap [--quick] [--no-opencl] [--no-filter-off] [--only SHAPE] [--reps N]
+ * usage: build/bench/overlap [--quick] [--no-opencl] [--no-filter-off] [--only SHAPE]... [--reps N]
  *                            [--digest]
+ * --only SHAPE (a name, or a name and triangle count: schonhardt, icosphere1280; up to 8 of them)
+ * runs those shapes alone.
  * --reps N runs exactly N passes over the configurations (for instruction counts under
  * valgrind --tool=callgrind, which repeat exactly where wall time does not). --digest prints,
  * per shape, a digest of every configuration's host result (filter on): a change meant to make
@@ -136,20 +140,22 @@ static uint64_t digest_result(uint64_t h, const ovl_out *o)
  * digest, the first pass's results are folded into *digest. */
 static long fixed_reps = 0;
 
-static double time_host(configs *cf, int n, int flags, double min_time, double *kept,
-                        uint64_t *digest)
+/*
+ * The host inputs of the n configurations, all on one scratch (iscr, rscr: freed by the caller;
+ * NULL when out of memory). A's vertices and both meshes' tables are per shape in a simulation,
+ * shared by all its particles (and by the OpenCL batches below): the same here, from the first
+ * configuration (each holds equal copies), so that a pair's time is not that of fetching its own
+ * copies.
+ */
+static void host_inputs(configs *cf, int n, int flags, ovl_in *in, int **iscr, double **rscr)
 {
     ovl_setup *s0 = &cf->s[0];
     int cap = ovl_pts_cap(s0->nta, s0->ntb);
-    int *iscr = malloc(sizeof(int) * ovl_iscratch_len(s0->nta, s0->ntb, s0->nva, s0->nvb));
-    double *rscr =
-        malloc(sizeof(double) * ovl_rscratch_len(s0->nta, s0->ntb, s0->nva, s0->nvb, cap));
-    ovl_in in[NCONF];
-    /* A's vertices and both meshes' tables are per shape in a simulation, shared by all its
-     * particles (and by the OpenCL batches below): the same here, from the first configuration
-     * (each holds equal copies), so that a pair's time is not that of fetching its own copies */
+    *iscr = malloc(sizeof(int) * ovl_iscratch_len(s0->nta, s0->ntb, s0->nva, s0->nvb));
+    *rscr = malloc(sizeof(double) * ovl_rscratch_len(s0->nta, s0->ntb, s0->nva, s0->nvb, cap));
+    if (!*iscr || !*rscr) return;
     for (int i = 0; i < n; i++) {
-        ovl_in_from_setup(&in[i], &cf->s[i], s0->va, s0->vb, flags, iscr, rscr, cap);
+        ovl_in_from_setup(&in[i], &cf->s[i], s0->va, s0->vb, flags, *iscr, *rscr, cap);
         in[i].vt_a_off = s0->vt_a_off;
         in[i].vt_a = s0->vt_a;
         in[i].vt_b_off = s0->vt_b_off;
@@ -158,6 +164,19 @@ static double time_host(configs *cf, int n, int flags, double min_time, double *
         in[i].disc_a = s0->disc_a;
         in[i].vc_b = s0->vc_b;
         in[i].disc_b = s0->disc_b;
+    }
+}
+
+static double time_host(configs *cf, int n, int flags, double min_time, double *kept,
+                        uint64_t *digest)
+{
+    ovl_in in[NCONF];
+    int *iscr;
+    double *rscr;
+    host_inputs(cf, n, flags, in, &iscr, &rscr);
+    if (!iscr || !rscr) {
+        fprintf(stderr, "bench: out of memory\n");
+        exit(1);
     }
     long reps = 0;
     double t0 = now(), t, sink = 0, kept_sum = 0;
@@ -195,8 +214,57 @@ static int cl_batch(const pd_device *dev)
  * budget on a GPU: a fixed 256 MiB ran 1280-triangle pairs 256 at a time on an H200). *used
  * receives the batch run.
  */
+/* Whether x and y agree to rel relative to scale (plus the same for a NaN in either). */
+static int close_to(double x, double y, double rel, double scale)
+{
+    return fabs(x - y) <= rel * scale;
+}
+
+/*
+ * How many of a batch's OpenCL results (out, OVL_RESULT_LEN doubles each, pair i of config i % n)
+ * agree with the host's to 1e-12, the issue's contract for double precision: the same hit, volume,
+ * depth and effective volume and depth relative to their own size, centroid and normal relative
+ * to the pair's largest coordinate and to 1. The batch's scratch is the device's, reused from
+ * earlier batches (ovl_run_cl), so a kernel path that read what an earlier pair left would show
+ * here.
+ */
+static int cl_agreeing(configs *cf, int n, const double *out, int batch)
+{
+    ovl_in in[NCONF];
+    ovl_out h[NCONF];
+    int *iscr;
+    double *rscr;
+    host_inputs(cf, n, 0, in, &iscr, &rscr);
+    int good = 0;
+    if (iscr && rscr) {
+        for (int i = 0; i < n; i++)
+            ovl_compute(&in[i], &h[i]);
+        double size = 0;
+        for (int v = 0; v < 3 * cf->s[0].nva; v++)
+            size = fmax(size, fabs(cf->s[0].va[v]));
+        for (int i = 0; i < batch; i++) {
+            ovl_result r;
+            ovl_result_unpack(out + (size_t)OVL_RESULT_LEN * i, &r);
+            const ovl_out *o = &h[i % n];
+            int ok = r.hit == o->hit && close_to(r.volume, o->volume, 1e-12, fabs(o->volume)) &&
+                     close_to(r.depth, o->depth, 1e-12, fabs(o->depth)) &&
+                     close_to(r.vol_eff, o->vol_eff, 1e-12, fabs(o->vol_eff)) &&
+                     close_to(r.depth_eff, o->depth_eff, 1e-12, fabs(o->depth_eff));
+            const double oc[3] = {o->centroid.x, o->centroid.y, o->centroid.z};
+            const double on[3] = {o->normal.x, o->normal.y, o->normal.z};
+            for (int k = 0; k < 3; k++)
+                ok = ok && close_to(r.centroid[k], oc[k], 1e-12, size) &&
+                     close_to(r.normal[k], on[k], 1e-12, 1);
+            good += ok;
+        }
+    }
+    free(iscr);
+    free(rscr);
+    return good;
+}
+
 static double time_cl(pd_device *dev, configs *cf, int n, int dbl, int batch, double min_time,
-                      int *used)
+                      int *used, int *agree)
 {
     size_t ints, reals;
     ovl_scratch_len(&cf->s[0], &ints, &reals);
@@ -227,15 +295,35 @@ static double time_cl(pd_device *dev, configs *cf, int n, int dbl, int batch, do
         reps++;
         t = now() - t0;
     } while (t < min_time);
+    if (agree) *agree = cl_agreeing(cf, n, out, batch);
     free(xf);
     free(out);
     return 1e9 * t / (reps * (double)batch);
 }
 
+static const struct {
+    const char *name;
+    int tris; /* 0: the shape's own */
+} shapes[] = {{"schonhardt", 0},
+              {"icosphere", 80},
+              {"icosphere", 320},
+              {"icosphere", 1280},
+              {"icosphere", 5120}}; /* 5120: large enough for the filter's clusters */
+enum { NSHAPE = sizeof shapes / sizeof shapes[0] };
+
+/* Whether --only's want names shape k: by name (every icosphere) or name and triangle count. */
+static int shape_named(const char *want, int k)
+{
+    char label[32];
+    snprintf(label, sizeof label, "%s%d", shapes[k].name, shapes[k].tris ? shapes[k].tris : 8);
+    return !strcmp(want, shapes[k].name) || !strcmp(want, label);
+}
+
 int main(int argc, char **argv)
 {
     int quick = 0, use_cl = 1, skip_off = 0, want_digest = 0;
-    const char *only = NULL;
+    const char *only[8]; /* --only, repeatable */
+    int nonly = 0;
     for (int i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "--quick"))
             quick = 1;
@@ -245,27 +333,32 @@ int main(int argc, char **argv)
             skip_off = 1;
         else if (!strcmp(argv[i], "--reps") && i + 1 < argc)
             fixed_reps = atol(argv[++i]);
-        else if (!strcmp(argv[i], "--only") && i + 1 < argc)
-            only = argv[++i];
+        else if (!strcmp(argv[i], "--only") && i + 1 < argc && nonly < 8)
+            only[nonly++] = argv[++i];
         else if (!strcmp(argv[i], "--digest"))
             want_digest = 1;
         else {
-            fprintf(stderr,
-                    "usage: %s [--quick] [--no-opencl] [--no-filter-off] [--only SHAPE] [--reps N] "
-                    "[--digest]\n",
-                    argv[0]);
+            fprintf(
+                stderr,
+                "usage: %s [--quick] [--no-opencl] [--no-filter-off] [--only SHAPE]... [--reps N] "
+                "[--digest]\n",
+                argv[0]);
             return 2;
         }
     }
     double min_time = quick ? 0.1 : 1.0;
-    struct {
-        const char *name;
-        int tris;
-    } shapes[] = {{"schonhardt", 0},
-                  {"icosphere", 80},
-                  {"icosphere", 320},
-                  {"icosphere", 1280},
-                  {"icosphere", 5120}}; /* 5120: large enough for the filter's clusters */
+    for (int j = 0; j < nonly; j++) {
+        int known = 0;
+        for (int k = 0; k < NSHAPE; k++)
+            known |= shape_named(only[j], k);
+        if (!known) {
+            fprintf(stderr,
+                    "bench: --only %s: no such shape (schonhardt, icosphere, or one of "
+                    "icosphere80, icosphere320, icosphere1280, icosphere5120)\n",
+                    only[j]);
+            return 2;
+        }
+    }
     pd_device *dev = NULL;
     pd_error err = {0};
     if (use_cl && pd_device_open(-1, &dev, &err) != PD_OK) {
@@ -283,18 +376,19 @@ int main(int argc, char **argv)
         "| opencl ns double | opencl ns single | opencl batch |\n");
     printf("|---|---|---|---|---|---|---|---|\n");
     /* every shape's configurations are kept to the end, for the ratio's rounds */
-    enum { NSHAPE = sizeof shapes / sizeof shapes[0] };
     static configs cfs[NSHAPE];
     pd_mesh *meshes[NSHAPE] = {NULL};
     int nconf[NSHAPE] = {0}, k80 = -1, k1280 = -1;
     uint64_t digest[NSHAPE];
+    int agree[NSHAPE] = {0}, agreed[NSHAPE] = {0}; /* OpenCL double results like the host's */
     double t80 = 0, t1280 = 0;
     for (int k = 0; k < NSHAPE; k++) {
         pd_mesh *m = NULL;
         configs *cf = &cfs[k];
-        char label[32];
-        snprintf(label, sizeof label, "%s%d", shapes[k].name, shapes[k].tris ? shapes[k].tris : 8);
-        if (only && strcmp(only, shapes[k].name) && strcmp(only, label)) continue;
+        int wanted = nonly == 0;
+        for (int j = 0; j < nonly; j++)
+            wanted |= shape_named(only[j], k);
+        if (!wanted) continue;
         if (pd_mesh_builtin(shapes[k].name, shapes[k].tris, 1, &m, &err) != PD_OK) {
             fprintf(stderr, "bench: %s\n", err.msg);
             return 1;
@@ -313,8 +407,9 @@ int main(int argc, char **argv)
         int batch = 0;
         if (use_cl) {
             if (pd_device_has_fp64(dev))
-                cld = time_cl(dev, cf, n, 1, cl_batch(dev), min_time, &batch);
-            clf = time_cl(dev, cf, n, 0, cl_batch(dev), min_time, &batch);
+                cld = time_cl(dev, cf, n, 1, cl_batch(dev), min_time, &batch, &agree[k]);
+            clf = time_cl(dev, cf, n, 0, cl_batch(dev), min_time, &batch, NULL);
+            if (cld > 0) agreed[k] = batch;
         }
         printf("| %s | %d | %.1f | %.0f | ", shapes[k].name, m->ntris, kept_on, on);
         if (off > 0)
@@ -362,11 +457,20 @@ int main(int argc, char **argv)
                 printf("# digest of the host results, %s %d: %016llx (%d configurations)\n",
                        shapes[k].name, meshes[k]->ntris, (unsigned long long)digest[k], nconf[k]);
     }
+    int wrong = 0;
+    for (int k = 0; k < NSHAPE; k++)
+        if (agreed[k] > 0) {
+            if (k == 0 || !agreed[k - 1]) printf("\n");
+            printf("# opencl double against the host, %s %d: %d of %d pairs agree to 1e-12\n",
+                   shapes[k].name, meshes[k]->ntris, agree[k], agreed[k]);
+            wrong += agree[k] != agreed[k];
+        }
+    if (wrong) fprintf(stderr, "bench: the OpenCL kernel disagrees with the host (see above)\n");
     for (int k = 0; k < NSHAPE; k++) {
         for (int i = 0; i < nconf[k]; i++)
             ovl_setup_free(&cfs[k].s[i]);
         pd_mesh_destroy(meshes[k]);
     }
     pd_device_close(dev);
-    return 0;
+    return wrong ? 1 : 0;
 }

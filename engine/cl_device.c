@@ -172,6 +172,8 @@ void pd_device_close(pd_device *dev)
     for (int p = 0; p < CL_MAX_PROGRAMS; p++)
         for (int v = 0; v < 4; v++)
             if (dev->cache[p][v]) clReleaseProgram(dev->cache[p][v]);
+    for (int i = 0; i < 3; i++)
+        if (dev->ovl_buf[i]) clReleaseMemObject(dev->ovl_buf[i]);
     clReleaseCommandQueue(dev->queue);
     clReleaseContext(dev->ctx);
     free(dev);
@@ -345,6 +347,25 @@ static void to_real(void *buf, const double *x, size_t n, int dbl)
             ((float *)buf)[i] = (float)x[i];
 }
 
+/* ovl_run_cl's per-pair buffer i (dev->ovl_buf) with room for at least bytes; a larger one
+ * replaces it (its contents are not kept). */
+static int ovl_buffer(pd_device *dev, int i, size_t bytes, cl_mem_flags flags, pd_error *err)
+{
+    static const char *const what[3] = {"clCreateBuffer(overlap integer scratch)",
+                                        "clCreateBuffer(overlap real scratch)",
+                                        "clCreateBuffer(overlap results)"};
+    if (dev->ovl_buf[i] && dev->ovl_bytes[i] >= bytes) return PD_OK;
+    if (dev->ovl_buf[i]) clReleaseMemObject(dev->ovl_buf[i]);
+    dev->ovl_buf[i] = NULL;
+    dev->ovl_bytes[i] = 0;
+    cl_int e;
+    cl_mem b = clCreateBuffer(dev->ctx, flags, bytes ? bytes : 16, NULL, &e);
+    if (e != CL_SUCCESS) return CL_FAIL(err, what[i], e);
+    dev->ovl_buf[i] = b;
+    dev->ovl_bytes[i] = bytes;
+    return PD_OK;
+}
+
 int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs, int dbl,
                double *out, pd_error *err)
 {
@@ -399,16 +420,18 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     if (e == CL_SUCCESS)
         b[14] = clCreateBuffer(dev->ctx, ro, sizeof(int) * 2 * s->nvb, s->vc_b, &e);
     if (e == CL_SUCCESS) b[15] = clCreateBuffer(dev->ctx, ro, rs * n_bb, hbb, &e);
-    if (e == CL_SUCCESS)
-        b[5] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, sizeof(int) * ilen * npairs, NULL, &e);
-    if (e == CL_SUCCESS)
-        b[6] = clCreateBuffer(dev->ctx, CL_MEM_READ_WRITE, rs * rlen * npairs, NULL, &e);
-    if (e == CL_SUCCESS)
-        b[7] = clCreateBuffer(dev->ctx, CL_MEM_WRITE_ONLY, rs * OVL_RESULT_LEN * npairs, NULL, &e);
     if (e != CL_SUCCESS) {
         rc = CL_FAIL(err, "clCreateBuffer", e);
         goto done;
     }
+    /* the per-pair buffers are the device's (b[5..7] only borrow them: not released below) */
+    rc = ovl_buffer(dev, 0, sizeof(int) * ilen * npairs, CL_MEM_READ_WRITE, err);
+    if (rc == PD_OK) rc = ovl_buffer(dev, 1, rs * rlen * npairs, CL_MEM_READ_WRITE, err);
+    if (rc == PD_OK) rc = ovl_buffer(dev, 2, rs * OVL_RESULT_LEN * npairs, CL_MEM_WRITE_ONLY, err);
+    if (rc != PD_OK) goto done;
+    b[5] = dev->ovl_buf[0];
+    b[6] = dev->ovl_buf[1];
+    b[7] = dev->ovl_buf[2];
     cl_kernel k = dev->k_overlap[variant];
     cl_int args_e = CL_SUCCESS;
     int ai = 0;
@@ -449,7 +472,7 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
         out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
 done:
     for (int i = 0; i < 16; i++)
-        if (b[i]) clReleaseMemObject(b[i]);
+        if (b[i] && (i < 5 || i > 7)) clReleaseMemObject(b[i]);
     free(hva);
     free(hvb);
     free(hba);

@@ -19,6 +19,14 @@ struct pd_device {
     cl_command_queue queue;
     cl_program prog[4]; /* overlap program by variant (CL_DOUBLE, CL_PLACES) */
     cl_kernel k_overlap[4];
+    /*
+     * ovl_run_cl's per-pair buffers (integer scratch, real scratch, results), kept from call to
+     * call and grown when a batch needs more. Created afresh for each call, a CPU device (PoCL)
+     * faulted in every page of them again: half of a Schonhardt batch's time went to the kernel's
+     * page faults (bench/RESULTS.md, 2026-12-07, sixth session).
+     */
+    cl_mem ovl_buf[3];
+    size_t ovl_bytes[3];
     cl_program cache[CL_MAX_PROGRAMS][4]; /* programs by pd_cl_sources index and variant */
     int fp64;
     int gpu;           /* a GPU (wide parallelism) rather than a CPU */

@@ -120,6 +120,15 @@ if "$OVERLAP" --quick --no-opencl --only schonhardt --reps 1 >"$tmp/ov" 2>&1 &&
     ok overlap_bench_runs
 else bad overlap_bench_runs "$(cat "$tmp/ov")"; fi
 expect_fail overlap_bench_bad_arg 2 "usage" -- "$OVERLAP" --frobnicate
+expect_fail overlap_bench_unknown_shape 2 "--only cube: no such shape" -- "$OVERLAP" --only cube
+# through OpenCL (PoCL in CI): two shapes in one run, so that the second's batches run on the
+# device's overlap scratch as the first's left it (ovl_run_cl keeps it between calls); every double
+# result of each shape's last batch agrees with the host's to 1e-12 (the bench checks; exit 1 if not)
+if "$OVERLAP" --quick --no-filter-off --only schonhardt --only icosphere80 >"$tmp/ovcl" 2>&1 &&
+    [ "$(grep -Ec '^# opencl double against the host, (schonhardt 8|icosphere 80): ([1-9][0-9]*) of \2 pairs agree to 1e-12$' "$tmp/ovcl")" -eq 2 ] &&
+    grep -Eq '^\| icosphere \| 80 \| [0-9.]+ \| [0-9]+ \| - \| [0-9]+ \| [0-9]+ \| [0-9]+ \|$' "$tmp/ovcl"; then
+    ok overlap_bench_opencl_agrees
+else bad overlap_bench_opencl_agrees "$(cat "$tmp/ovcl")"; fi
 # the 1280 / 80 ratio from the rows and from five back-to-back rounds: the median lies in the
 # range printed with it, and a 1280-triangle pair costs more than an 80-triangle one (~4.5x)
 if "$OVERLAP" --quick --no-opencl --no-filter-off --reps 1 --digest >"$tmp/ov" 2>&1 &&
