@@ -253,7 +253,11 @@ typedef struct pd_device_info {
 /* Lists up to max devices into out; *n receives how many exist. */
 int pd_device_list(pd_device_info *out, int max, int *n, pd_error *err);
 
-/* Opens OpenCL device `index` over all platforms (-1: first GPU, else first device). */
+/*
+ * Opens OpenCL device `index` over all platforms (-1: first GPU, else first device). A device is
+ * used by one thread at a time: its kernels' arguments and the overlap's scratch buffers are its
+ * own (the daemon's worker thread holds its device).
+ */
 int pd_device_open(int index, pd_device **out, pd_error *err);
 void pd_device_close(pd_device *dev);
 const char *pd_device_name(const pd_device *dev);
