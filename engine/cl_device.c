@@ -424,14 +424,11 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
         rc = CL_FAIL(err, "clCreateBuffer", e);
         goto done;
     }
-    /* the per-pair buffers are the device's (b[5..7] only borrow them: not released below) */
+    /* the per-pair buffers are the device's, kept for its next call */
     rc = ovl_buffer(dev, 0, sizeof(int) * ilen * npairs, CL_MEM_READ_WRITE, err);
     if (rc == PD_OK) rc = ovl_buffer(dev, 1, rs * rlen * npairs, CL_MEM_READ_WRITE, err);
     if (rc == PD_OK) rc = ovl_buffer(dev, 2, rs * OVL_RESULT_LEN * npairs, CL_MEM_WRITE_ONLY, err);
     if (rc != PD_OK) goto done;
-    b[5] = dev->ovl_buf[0];
-    b[6] = dev->ovl_buf[1];
-    b[7] = dev->ovl_buf[2];
     cl_kernel k = dev->k_overlap[variant];
     cl_int args_e = CL_SUCCESS;
     int ai = 0;
@@ -448,10 +445,10 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
     args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[4]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &npairs);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &flags);
-    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[5]);
-    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[6]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &dev->ovl_buf[0]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &dev->ovl_buf[1]);
     args_e |= clSetKernelArg(k, ai++, sizeof(int), &cap);
-    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &b[7]);
+    args_e |= clSetKernelArg(k, ai++, sizeof(cl_mem), &dev->ovl_buf[2]);
     if (args_e != CL_SUCCESS) {
         rc = CL_ARG_FAIL(err, "overlap_pairs");
         goto done;
@@ -462,8 +459,8 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
         rc = CL_FAIL(err, "clEnqueueNDRangeKernel(overlap_pairs)", e);
         goto done;
     }
-    e = clEnqueueReadBuffer(dev->queue, b[7], CL_TRUE, 0, rs * OVL_RESULT_LEN * npairs, hout, 0,
-                            NULL, NULL);
+    e = clEnqueueReadBuffer(dev->queue, dev->ovl_buf[2], CL_TRUE, 0, rs * OVL_RESULT_LEN * npairs,
+                            hout, 0, NULL, NULL);
     if (e != CL_SUCCESS) {
         rc = CL_FAIL(err, "clEnqueueReadBuffer", e);
         goto done;
@@ -472,7 +469,7 @@ int ovl_run_cl(pd_device *dev, const ovl_setup *s, const double *xf, int npairs,
         out[i] = dbl ? ((double *)hout)[i] : (double)((float *)hout)[i];
 done:
     for (int i = 0; i < 16; i++)
-        if (b[i] && (i < 5 || i > 7)) clReleaseMemObject(b[i]);
+        if (b[i]) clReleaseMemObject(b[i]);
     free(hva);
     free(hvb);
     free(hba);
