@@ -10,10 +10,10 @@
 # It finds the NVIDIA driver's OpenCL library (libnvidia-opencl.so.1), points the carried ICD
 # loader at it, and runs, each stage under a timeout taken from what is left of the budget (540 s
 # by default, so that a 600 s call returns with its files): the devices; one overlap on the host
-# and through OpenCL in both precisions (the kernels' first build on that driver); bench/overlap;
-# bench/step for falling Schönhardt prisms at 1e3-1e6 and 5e4 settled spheres; the dense bed;
-# depth-first against breadth-first traversal; the step in single precision; then the 1e6
-# packing with what time is left. A stage that fails or times out is logged and the
+# and through OpenCL, each in both precisions (the kernels' first build on that driver);
+# bench/overlap; bench/step for falling Schönhardt prisms at 1e3-1e6 and 5e4 settled spheres;
+# the dense bed; depth-first against breadth-first traversal; the step in single precision; then
+# the 1e6 packing with what time is left. A stage that fails or times out is logged and the
 # next one runs. Everything goes to $OUT (the device tool's folder; build/device-out otherwise):
 # device.log, and the packing's CSV and plots (at most 8 files come back).
 # --cpu: the same on this machine's first OpenCL device (PoCL), at sizes that finish in minutes.
@@ -127,10 +127,12 @@ else
     PACK=1000000
     PACK_MODE=--full
 fi
-stage devices 30 "$POLYDEM" devices
-# the kernels' first build on this driver; host and OpenCL must agree to 1e-12 (issue 2)
+# --json: whether single precision's / and sqrt are correctly rounded (fp32_rounded) is shown
+stage devices 30 "$POLYDEM" devices --json
+# the kernels' first build on this driver; host and OpenCL must agree to 1e-12 in double precision
+# (issue 2), and in single precision to the bit where the device has fp32_rounded
 pose="--pose-a '0 0 0 0.8 0.2 -0.3 0.1' --pose-b '0.8 0.01 0.005 0.3 0.5 0.7 -0.2'"
-for mode in "" "--opencl" "--opencl --single"; do
+for mode in "" "--opencl" "--single" "--opencl --single"; do
     stage "overlap ${mode:-host}" 120 sh -c "'$POLYDEM' overlap builtin:rock:1280 builtin:rock:1280 \
         $pose $mode"
 done

@@ -7,8 +7,10 @@
  * times the overlap kernel's own code on one host core (double precision, scratch preallocated as
  * the engine will) with the half-plane filter on and off, and the OpenCL kernel on the default
  * device for a batch of pairs (one work-item per pair, buffers and transfers included), whose
- * double-precision results are then checked against the host's (to 1e-12, the issue's contract;
- * exit status 1 where one disagrees). The configurations of a shape share its vertex and table
+ * double-precision results are then checked against the host's (to 1e-12, the issue's contract)
+ * and its single-precision results against the host's single-precision ones (to the bit, where
+ * the device rounds / and sqrt correctly: pd_device_fp32_rounded); exit status 1 where one
+ * disagrees. The configurations of a shape share its vertex and table
  * arrays, as a simulation's particles do.
  * Issue 2's icosphere 1280 / 80 ratio is printed from the table's rows and, steadier, as the
  * median of five rounds that time the two spheres back to back.
@@ -257,6 +259,49 @@ static int cl_agreeing(configs *cf, int n, const double *out, int batch)
     return good;
 }
 
+/* Whether two results are the same to the bit (a NaN in either is not). */
+static int same_result(const ovl_result *a, const ovl_result *b)
+{
+    int same = a->hit == b->hit && a->places == b->places && a->volume == b->volume &&
+               a->depth == b->depth && a->vol_eff == b->vol_eff && a->depth_eff == b->depth_eff;
+    for (int k = 0; k < 3; k++)
+        same = same && a->centroid[k] == b->centroid[k] && a->normal[k] == b->normal[k] &&
+               a->point_eff[k] == b->point_eff[k];
+    return same;
+}
+
+/*
+ * How many of a batch of pairs (xf, cycling through the n configurations) run through OpenCL in
+ * single precision give the host's single-precision results (ovl_run_f32) to the bit: the same
+ * source, rounded the same way (no contraction on either side; / and sqrt correctly rounded where
+ * the device can, pd_device_fp32_rounded), gives the same bits. The batch is run again for this,
+ * untimed, with separate places asked for as ovl_run_f32 always asks, so that every field of the
+ * record is compared. Returns -1 when it could not be run.
+ */
+static int cl_agreeing_f32(pd_device *dev, configs *cf, int n, const double *xf, int batch)
+{
+    ovl_result *h = malloc(sizeof *h * n);
+    double *out = malloc(sizeof(double) * OVL_RESULT_LEN * batch);
+    ovl_setup sp = cf->s[0];
+    sp.flags |= PD_OVERLAP_PLACES;
+    pd_error err = {0};
+    int good = -1;
+    if (!h || !out || ovl_run_cl(dev, &sp, xf, batch, 0, out, &err) != PD_OK) goto done;
+    for (int i = 0; i < n; i++)
+        if (ovl_run_f32(&cf->s[i], &h[i]) != PD_OK) goto done;
+    good = 0;
+    for (int i = 0; i < batch; i++) {
+        ovl_result r;
+        ovl_result_unpack(out + (size_t)OVL_RESULT_LEN * i, &r);
+        good += same_result(&r, &h[i % n]);
+    }
+done:
+    if (good < 0 && err.msg[0]) fprintf(stderr, "bench: %s\n", err.msg);
+    free(h);
+    free(out);
+    return good;
+}
+
 /*
  * OpenCL timing: ns per overlap for a batch of up to `batch` pairs cycling through the configs,
  * one work-item each, halved until their scratch fits (256 MiB on a CPU, pd_device_capacity's
@@ -295,7 +340,8 @@ static double time_cl(pd_device *dev, configs *cf, int n, int dbl, int batch, do
         reps++;
         t = now() - t0;
     } while (t < min_time);
-    if (agree) *agree = cl_agreeing(cf, n, out, batch);
+    if (agree)
+        *agree = dbl ? cl_agreeing(cf, n, out, batch) : cl_agreeing_f32(dev, cf, n, xf, batch);
     free(xf);
     free(out);
     return 1e9 * t / (reps * (double)batch);
@@ -380,7 +426,8 @@ int main(int argc, char **argv)
     pd_mesh *meshes[NSHAPE] = {NULL};
     int nconf[NSHAPE] = {0}, k80 = -1, k1280 = -1;
     uint64_t digest[NSHAPE];
-    int agree[NSHAPE] = {0}, agreed[NSHAPE] = {0}; /* OpenCL double results like the host's */
+    int agree[NSHAPE] = {0}, agreed[NSHAPE] = {0};     /* OpenCL double results like the host's */
+    int agree_f[NSHAPE] = {0}, agreed_f[NSHAPE] = {0}; /* and single results, to the bit */
     double t80 = 0, t1280 = 0;
     for (int k = 0; k < NSHAPE; k++) {
         pd_mesh *m = NULL;
@@ -410,7 +457,8 @@ int main(int argc, char **argv)
                 cld = time_cl(dev, cf, n, 1, cl_batch(dev), min_time, &batch, &agree[k]);
                 if (cld > 0) agreed[k] = batch;
             }
-            clf = time_cl(dev, cf, n, 0, cl_batch(dev), min_time, &batch, NULL);
+            clf = time_cl(dev, cf, n, 0, cl_batch(dev), min_time, &batch, &agree_f[k]);
+            if (clf > 0) agreed_f[k] = batch;
         }
         printf("| %s | %d | %.1f | %.0f | ", shapes[k].name, m->ntris, kept_on, on);
         if (off > 0)
@@ -465,6 +513,24 @@ int main(int argc, char **argv)
             printf("# opencl double against the host, %s %d: %d of %d pairs agree to 1e-12\n",
                    shapes[k].name, meshes[k]->ntris, agree[k], agreed[k]);
             wrong += agree[k] != agreed[k];
+        }
+    /* single precision has no tolerance to meet, but the same code rounded the same way gives
+     * the same bits; a device that may round / and sqrt otherwise is shown, not failed */
+    int rounded = use_cl && pd_device_fp32_rounded(dev);
+    for (int k = 0; k < NSHAPE; k++)
+        if (agreed_f[k] > 0) {
+            if (!listed++) printf("\n");
+            if (agree_f[k] < 0)
+                printf("# opencl single against the host, %s %d: not checked (see above)\n",
+                       shapes[k].name, meshes[k]->ntris);
+            else
+                printf("# opencl single against the host, %s %d: %d of %d pairs agree to the "
+                       "bit%s\n",
+                       shapes[k].name, meshes[k]->ntris, agree_f[k], agreed_f[k],
+                       rounded ? ""
+                               : " (the device's single-precision / and sqrt are not "
+                                 "correctly rounded: the bits may differ)");
+            wrong += agree_f[k] < 0 || (rounded && agree_f[k] != agreed_f[k]);
         }
     if (wrong) fprintf(stderr, "bench: the OpenCL kernel disagrees with the host (see above)\n");
     for (int k = 0; k < NSHAPE; k++) {

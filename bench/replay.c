@@ -10,7 +10,10 @@
  * kernels/contact.cl runs them, over consecutive frames, carrying each touching pair's contact
  * point to the next. Given a run written with every step as a frame ("output_interval" equal to
  * the time step), its per-frame largest depth / size is the run's /stats/max_overlap_ratio row,
- * to every printed digit with PoCL (bench/RESULTS.md, 2026-12-07, night). Start some frames
+ * to every printed digit with PoCL (bench/RESULTS.md, 2026-12-07, night), and on any device whose
+ * single-precision / and sqrt are correctly rounded (`polydem devices`: fp32_rounded; the engine
+ * builds its programs to round them so). Without that, OpenCL allows them 2.5 and 3 ulps, and a
+ * device that takes them computes other bits than the host. Start some frames
  * before the step of interest: the first frame replayed has no last contact point. Walls and
  * analytic spheres are not replayed; separate places ("contact_places") are refused.
  *

@@ -547,13 +547,18 @@ static int cmd_devices(int argc, char **argv)
         const pd_device_info *d = &info[i];
         if (json)
             printf("%s{\"index\": %d, \"name\": \"%s\", \"platform\": \"%s\", \"type\": \"%s\", "
-                   "\"compute_units\": %d, \"global_mem_bytes\": %.0f, \"fp64\": %s}",
+                   "\"compute_units\": %d, \"global_mem_bytes\": %.0f, \"fp64\": %s, "
+                   "\"fp32_rounded\": %s}",
                    i ? ", " : "", d->index, d->name, d->platform, d->type, d->compute_units,
-                   d->global_mem_bytes, d->fp64 ? "true" : "false");
+                   d->global_mem_bytes, d->fp64 ? "true" : "false",
+                   d->fp32_rounded ? "true" : "false");
         else
-            printf("%d: %s [%s, %s], %d compute units, %.1f GiB, %s\n", d->index, d->name,
+            printf("%d: %s [%s, %s], %d compute units, %.1f GiB, %s%s\n", d->index, d->name,
                    d->platform, d->type, d->compute_units, d->global_mem_bytes / 1073741824.0,
-                   d->fp64 ? "double and single precision" : "single precision only");
+                   d->fp64 ? "double and single precision" : "single precision only",
+                   d->fp32_rounded ? ""
+                                   : " (single precision's / and sqrt not correctly rounded: "
+                                     "its overlaps may differ from the host's in the last bits)");
     }
     if (json) printf("]\n");
     return 0;

@@ -73,6 +73,15 @@ static int enumerate_devices(device_ref *out, int *n, pd_error *err)
     return PD_OK;
 }
 
+/* Whether the device rounds single-precision / and sqrt correctly on request (pd_device). */
+static int fp32_rounded(cl_device_id id)
+{
+    cl_device_fp_config fp = 0;
+    if (clGetDeviceInfo(id, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, NULL) != CL_SUCCESS)
+        return 0;
+    return (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+}
+
 int pd_device_list(pd_device_info *out, int max, int *n, pd_error *err)
 {
     device_ref devs[MAX_DEVICES];
@@ -99,6 +108,7 @@ int pd_device_list(pd_device_info *out, int max, int *n, pd_error *err)
         o->compute_units = (int)cu;
         o->global_mem_bytes = (double)mem;
         o->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
+        o->fp32_rounded = fp32_rounded(devs[i].id);
     }
     return PD_OK;
 }
@@ -136,6 +146,7 @@ int pd_device_open(int index, pd_device **out, pd_error *err)
     char ext[8192] = {0};
     clGetDeviceInfo(pickd, CL_DEVICE_EXTENSIONS, sizeof ext - 1, ext, NULL);
     dev->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
+    dev->fp32_rounded = fp32_rounded(pickd);
     dev->ctx = clCreateContext(NULL, 1, &pickd, NULL, NULL, &e);
     if (e != CL_SUCCESS) {
         free(dev);
@@ -187,6 +198,10 @@ int pd_device_has_fp64(const pd_device *dev)
 {
     return dev->fp64;
 }
+int pd_device_fp32_rounded(const pd_device *dev)
+{
+    return dev->fp32_rounded;
+}
 int pd_device_is_gpu(const pd_device *dev)
 {
     return dev->gpu;
@@ -208,9 +223,10 @@ int cl_build_program(pd_device *dev, const char *name, const char *src, int vari
     cl_int e;
     cl_program prog = clCreateProgramWithSource(dev->ctx, 1, &src, NULL, &e);
     if (e != CL_SUCCESS) return CL_FAIL(err, "clCreateProgramWithSource", e);
-    char opts[64];
-    snprintf(opts, sizeof opts, "-DPD_DOUBLE=%d -DOVL_PLACES_BUILD=%d", (variant & CL_DOUBLE) != 0,
-             (variant & CL_PLACES) != 0);
+    char opts[128];
+    snprintf(opts, sizeof opts, "-DPD_DOUBLE=%d -DOVL_PLACES_BUILD=%d%s",
+             (variant & CL_DOUBLE) != 0, (variant & CL_PLACES) != 0,
+             dev->fp32_rounded ? " -cl-fp32-correctly-rounded-divide-sqrt" : "");
     e = clBuildProgram(prog, 1, &dev->device, opts, NULL, NULL);
     if (e != CL_SUCCESS) {
         char log[4096] = {0};

@@ -29,6 +29,16 @@ struct pd_device {
     size_t ovl_bytes[3];
     cl_program cache[CL_MAX_PROGRAMS][4]; /* programs by pd_cl_sources index and variant */
     int fp64;
+    /*
+     * CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT: the device can round single-precision / and sqrt as
+     * the host does, and its programs are built with -cl-fp32-correctly-rounded-divide-sqrt, so
+     * that its single-precision answers are the host's to the bit (bench/overlap and
+     * tests/physics/test_overlap.c check; bench/replay relies on it). Without the option OpenCL
+     * allows them 2.5 and 3 ulps. The H200's single-precision overlap, built without it, differed
+     * from the host's by 6.3e-7 where its double agreed to all 17 digits (bench/RESULTS.md,
+     * 2026-11-30, late); PoCL's / and sqrt are the CPU's and agree either way.
+     */
+    int fp32_rounded;
     int gpu;           /* a GPU (wide parallelism) rather than a CPU */
     int compute_units; /* CL_DEVICE_MAX_COMPUTE_UNITS */
     double global_mem; /* CL_DEVICE_GLOBAL_MEM_SIZE, bytes */

@@ -248,6 +248,9 @@ typedef struct pd_device_info {
     int compute_units;
     double global_mem_bytes;
     int fp64;
+    /* single-precision / and sqrt rounded as on the host (CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT;
+     * programs are then built so): its single-precision overlaps are the host's to the bit */
+    int fp32_rounded;
 } pd_device_info;
 
 /* Lists up to max devices into out; *n receives how many exist. */
@@ -262,6 +265,8 @@ int pd_device_open(int index, pd_device **out, pd_error *err);
 void pd_device_close(pd_device *dev);
 const char *pd_device_name(const pd_device *dev);
 int pd_device_has_fp64(const pd_device *dev);
+/* whether its single-precision / and sqrt are the host's (pd_device_info.fp32_rounded) */
+int pd_device_fp32_rounded(const pd_device *dev);
 /*
  * What fills dev: *work_items, the work-items the engine's contact stage launches on it (256 per
  * compute unit), and *scratch_bytes, what per-work-item scratch may take of a GPU (a quarter of

@@ -416,6 +416,7 @@ json_t *worker_device_json(worker *w)
         json_object_set_new(o, "compute_units", json_integer(d->compute_units));
         json_object_set_new(o, "global_mem_bytes", json_real(d->global_mem_bytes));
         json_object_set_new(o, "fp64", json_boolean(d->fp64));
+        json_object_set_new(o, "fp32_rounded", json_boolean(d->fp32_rounded));
         json_object_set_new(o, "precisions", prec ? prec : json_array());
     }
     pthread_mutex_unlock(&w->mu);

@@ -123,9 +123,12 @@ expect_fail overlap_bench_bad_arg 2 "usage" -- "$OVERLAP" --frobnicate
 expect_fail overlap_bench_unknown_shape 2 "--only cube: no such shape" -- "$OVERLAP" --only cube
 # through OpenCL (PoCL in CI): two shapes in one run, so that the second's batches run on the
 # device's overlap scratch as the first's left it (ovl_run_cl keeps it between calls); every double
-# result of each shape's last batch agrees with the host's to 1e-12 (the bench checks; exit 1 if not)
+# result of each shape's last batch agrees with the host's to 1e-12, and every single one is the
+# host's single-precision result to the bit, PoCL rounding / and sqrt correctly (the bench checks;
+# exit 1 if not)
 if "$OVERLAP" --quick --no-filter-off --only schonhardt --only icosphere80 >"$tmp/ovcl" 2>&1 &&
     [ "$(grep -Ec '^# opencl double against the host, (schonhardt 8|icosphere 80): ([1-9][0-9]*) of \2 pairs agree to 1e-12$' "$tmp/ovcl")" -eq 2 ] &&
+    [ "$(grep -Ec '^# opencl single against the host, (schonhardt 8|icosphere 80): ([1-9][0-9]*) of \2 pairs agree to the bit$' "$tmp/ovcl")" -eq 2 ] &&
     grep -Eq '^\| icosphere \| 80 \| [0-9.]+ \| [0-9]+ \| - \| [0-9]+ \| [0-9]+ \| [0-9]+ \|$' "$tmp/ovcl"; then
     ok overlap_bench_opencl_agrees
 else bad overlap_bench_opencl_agrees "$(cat "$tmp/ovcl")"; fi

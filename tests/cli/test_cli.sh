@@ -194,9 +194,12 @@ if ! grep -q -- '-0[],]' "$tmp/m9" && grep -q '"inertia": \[\[0.1666666666666666
 then ok mesh_info_prints_no_negative_zero
 else bad mesh_info_prints_no_negative_zero "$(cat "$tmp/m9")"; fi
 
-# devices: at least the device the tests use, as text and as JSON
+# devices: at least the device the tests use, as text and as JSON, with whether its single
+# precision rounds / and sqrt as the host does (the text says so only where it does not)
 if $POLYDEM devices >"$tmp/d1" && grep -q '^0: ' "$tmp/d1" && $POLYDEM devices --json >"$tmp/d2" &&
-    grep -q '^\[{"index": 0, "name": ' "$tmp/d2"; then
+    grep -q '^\[{"index": 0, "name": ' "$tmp/d2" &&
+    grep -Eq '"fp64": (true|false), "fp32_rounded": (true|false)}' "$tmp/d2" &&
+    [ "$(grep -c '"fp32_rounded": false' "$tmp/d2")" = "$(grep -c 'not correctly rounded' "$tmp/d1")" ]; then
     ok devices
 else bad devices "$(cat "$tmp/d1" "$tmp/d2")"; fi
 expect_fail devices_bad_flag 2 "--bogus" -- $POLYDEM devices --bogus
