@@ -73,44 +73,98 @@ static int enumerate_devices(device_ref *out, int *n, pd_error *err)
     return PD_OK;
 }
 
-/* Whether the device rounds single-precision / and sqrt correctly on request (pd_device). */
-static int fp32_rounded(cl_device_id id)
+/* The error of a failed device or platform query, naming it. */
+static int info_fail(pd_error *err, const char *what, cl_int e)
 {
+    return pd_error_set(err, PD_ECL, "opencl: querying %s failed: %s (%d)", what, cl_errstr(e),
+                        (int)e);
+}
+
+/* A fixed-size device query (INFO_VALUE: the query's name in the error). */
+static int info_value(cl_device_id id, cl_device_info what, const char *name, size_t size,
+                      void *out, pd_error *err)
+{
+    cl_int e = clGetDeviceInfo(id, what, size, out, NULL);
+    return e == CL_SUCCESS ? PD_OK : info_fail(err, name, e);
+}
+#define INFO_VALUE(id, what, v, err) info_value(id, what, #what, sizeof(v), &(v), err)
+
+/*
+ * A string query of device id (or, where id is NULL, of platform plat), whole, into *out
+ * (malloc'ed; NULL on error). Asked into a fixed buffer, a string longer than the buffer is
+ * refused (CL_INVALID_VALUE) and was taken for an empty one: an extension list longer than 8 KiB
+ * would have hidden cl_khr_fp64.
+ */
+static int info_string(cl_device_id id, cl_platform_id plat, cl_uint what, const char *name,
+                       char **out, pd_error *err)
+{
+    size_t len = 0;
+    *out = NULL;
+    cl_int e = id ? clGetDeviceInfo(id, what, 0, NULL, &len)
+                  : clGetPlatformInfo(plat, what, 0, NULL, &len);
+    if (e != CL_SUCCESS) return info_fail(err, name, e);
+    char *s = malloc(len + 1);
+    if (!s) return pd_error_set(err, PD_ENOMEM, "opencl: out of memory querying %s", name);
+    e = id ? clGetDeviceInfo(id, what, len, s, NULL) : clGetPlatformInfo(plat, what, len, s, NULL);
+    if (e != CL_SUCCESS) {
+        free(s);
+        return info_fail(err, name, e);
+    }
+    s[len] = '\0';
+    *out = s;
+    return PD_OK;
+}
+
+/*
+ * What pd_device_list reports of device d (number index), and, in *max_alloc where not NULL, its
+ * largest allocation in bytes. Every query is checked: a device that cannot say what it is is an
+ * error, not a device of no memory and no double precision.
+ */
+static int device_describe(const device_ref *d, int index, pd_device_info *o, cl_ulong *max_alloc,
+                           pd_error *err)
+{
+    char *name = NULL, *plat = NULL, *ext = NULL;
+    cl_device_type type = 0;
+    cl_uint cu = 0;
+    cl_ulong mem = 0, amax = 0;
     cl_device_fp_config fp = 0;
-    if (clGetDeviceInfo(id, CL_DEVICE_SINGLE_FP_CONFIG, sizeof fp, &fp, NULL) != CL_SUCCESS)
-        return 0;
-    return (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+    int rc = info_string(d->id, NULL, CL_DEVICE_NAME, "CL_DEVICE_NAME", &name, err);
+    if (rc == PD_OK)
+        rc = info_string(NULL, d->platform, CL_PLATFORM_NAME, "CL_PLATFORM_NAME", &plat, err);
+    if (rc == PD_OK)
+        rc = info_string(d->id, NULL, CL_DEVICE_EXTENSIONS, "CL_DEVICE_EXTENSIONS", &ext, err);
+    if (rc == PD_OK) rc = INFO_VALUE(d->id, CL_DEVICE_TYPE, type, err);
+    if (rc == PD_OK) rc = INFO_VALUE(d->id, CL_DEVICE_MAX_COMPUTE_UNITS, cu, err);
+    if (rc == PD_OK) rc = INFO_VALUE(d->id, CL_DEVICE_GLOBAL_MEM_SIZE, mem, err);
+    if (rc == PD_OK) rc = INFO_VALUE(d->id, CL_DEVICE_MAX_MEM_ALLOC_SIZE, amax, err);
+    if (rc == PD_OK) rc = INFO_VALUE(d->id, CL_DEVICE_SINGLE_FP_CONFIG, fp, err);
+    if (rc == PD_OK) {
+        memset(o, 0, sizeof *o);
+        o->index = index;
+        snprintf(o->name, sizeof o->name, "%s", name);
+        snprintf(o->platform, sizeof o->platform, "%s", plat);
+        strcpy(o->type, (type & CL_DEVICE_TYPE_GPU)   ? "GPU"
+                        : (type & CL_DEVICE_TYPE_CPU) ? "CPU"
+                                                      : "other");
+        o->compute_units = cu > 0 ? (int)cu : 1;
+        o->global_mem_bytes = (double)mem;
+        o->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
+        o->fp32_rounded = (fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+        if (max_alloc) *max_alloc = amax;
+    }
+    free(name);
+    free(plat);
+    free(ext);
+    return rc;
 }
 
 int pd_device_list(pd_device_info *out, int max, int *n, pd_error *err)
 {
     device_ref devs[MAX_DEVICES];
     int rc = enumerate_devices(devs, n, err);
-    if (rc != PD_OK) return rc;
-    for (int i = 0; i < *n && i < max; i++) {
-        pd_device_info *o = &out[i];
-        memset(o, 0, sizeof *o);
-        o->index = i;
-        clGetPlatformInfo(devs[i].platform, CL_PLATFORM_NAME, sizeof o->platform - 1, o->platform,
-                          NULL);
-        clGetDeviceInfo(devs[i].id, CL_DEVICE_NAME, sizeof o->name - 1, o->name, NULL);
-        cl_device_type type = 0;
-        cl_uint cu = 0;
-        cl_ulong mem = 0;
-        char ext[8192] = {0};
-        clGetDeviceInfo(devs[i].id, CL_DEVICE_TYPE, sizeof type, &type, NULL);
-        clGetDeviceInfo(devs[i].id, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof cu, &cu, NULL);
-        clGetDeviceInfo(devs[i].id, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof mem, &mem, NULL);
-        clGetDeviceInfo(devs[i].id, CL_DEVICE_EXTENSIONS, sizeof ext - 1, ext, NULL);
-        strcpy(o->type, (type & CL_DEVICE_TYPE_GPU)   ? "GPU"
-                        : (type & CL_DEVICE_TYPE_CPU) ? "CPU"
-                                                      : "other");
-        o->compute_units = (int)cu;
-        o->global_mem_bytes = (double)mem;
-        o->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
-        o->fp32_rounded = fp32_rounded(devs[i].id);
-    }
-    return PD_OK;
+    for (int i = 0; rc == PD_OK && i < *n && i < max; i++)
+        rc = device_describe(&devs[i], i, &out[i], NULL, err);
+    return rc;
 }
 
 int pd_device_open(int index, pd_device **out, pd_error *err)
@@ -126,7 +180,8 @@ int pd_device_open(int index, pd_device **out, pd_error *err)
         pick = n > 0 ? 0 : -1;
         for (int i = n - 1; i >= 0; i--) {
             cl_device_type type = 0;
-            clGetDeviceInfo(devs[i].id, CL_DEVICE_TYPE, sizeof type, &type, NULL);
+            rc = INFO_VALUE(devs[i].id, CL_DEVICE_TYPE, type, err);
+            if (rc != PD_OK) return rc;
             if (type & CL_DEVICE_TYPE_GPU) pick = i;
         }
     }
@@ -136,33 +191,27 @@ int pd_device_open(int index, pd_device **out, pd_error *err)
                                 index, n);
         return pd_error_set(err, PD_ECL, "opencl: no device found");
     }
+    pd_device_info info;
+    cl_ulong amax = 0;
+    rc = device_describe(&devs[pick], pick, &info, &amax, err);
+    if (rc != PD_OK) return rc;
     cl_device_id pickd = devs[pick].id;
-    cl_platform_id pick_plat = devs[pick].platform;
     pd_device *dev = calloc(1, sizeof *dev);
     if (!dev) return pd_error_set(err, PD_ENOMEM, "opencl: out of memory");
-    dev->platform = pick_plat;
+    dev->platform = devs[pick].platform;
     dev->device = pickd;
-    clGetDeviceInfo(pickd, CL_DEVICE_NAME, sizeof dev->name - 1, dev->name, NULL);
-    char ext[8192] = {0};
-    clGetDeviceInfo(pickd, CL_DEVICE_EXTENSIONS, sizeof ext - 1, ext, NULL);
-    dev->fp64 = strstr(ext, "cl_khr_fp64") != NULL;
-    dev->fp32_rounded = fp32_rounded(pickd);
+    snprintf(dev->name, sizeof dev->name, "%s", info.name);
+    dev->fp64 = info.fp64;
+    dev->fp32_rounded = info.fp32_rounded;
+    dev->gpu = strcmp(info.type, "GPU") == 0;
+    dev->compute_units = info.compute_units;
+    dev->global_mem = info.global_mem_bytes;
+    dev->max_alloc = (double)amax;
     dev->ctx = clCreateContext(NULL, 1, &pickd, NULL, NULL, &e);
     if (e != CL_SUCCESS) {
         free(dev);
         return CL_FAIL(err, "clCreateContext", e);
     }
-    cl_device_type dtype = 0;
-    cl_uint units = 1;
-    clGetDeviceInfo(pickd, CL_DEVICE_TYPE, sizeof dtype, &dtype, NULL);
-    clGetDeviceInfo(pickd, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof units, &units, NULL);
-    dev->gpu = (dtype & CL_DEVICE_TYPE_GPU) != 0;
-    dev->compute_units = units > 0 ? (int)units : 1;
-    cl_ulong gmem = 0, amax = 0;
-    clGetDeviceInfo(pickd, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof gmem, &gmem, NULL);
-    clGetDeviceInfo(pickd, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof amax, &amax, NULL);
-    dev->global_mem = (double)gmem;
-    dev->max_alloc = (double)amax;
     dev->queue = clCreateCommandQueue(dev->ctx, pickd, 0, &e);
     if (e != CL_SUCCESS) {
         clReleaseContext(dev->ctx);
