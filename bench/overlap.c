@@ -10,8 +10,8 @@
  * double-precision results are then checked against the host's (to 1e-12, the issue's contract)
  * and its single-precision results against the host's single-precision ones (to the bit, where
  * the device rounds / and sqrt correctly: pd_device_fp32_rounded); exit status 1 where one
- * disagrees. The configurations of a shape share its vertex and table
- * arrays, as a simulation's particles do.
+ * disagrees. The configurations of a shape share its vertex and table arrays, as a simulation's
+ * particles do.
  * Issue 2's icosphere 1280 / 80 ratio is printed from the table's rows and, steadier, as the
  * median of five rounds that time the two spheres back to back.
  *

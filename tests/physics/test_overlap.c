@@ -15,6 +15,7 @@
 #include "overlap_predicates.h" /* OVL_ORIGIN */
 #include "overlap_run.h"
 #include "box_pairs.h"
+#include "cl_internal.h" /* cl_program_get, for the programs' build options */
 #include "lattice_cube.h"
 #include "polydem.h"
 #include "ref_overlap.h"
@@ -1412,6 +1413,42 @@ TEST(opencl_kernel_agrees_with_host)
     pd_device_close(dev);
 }
 
+/*
+ * A device that rounds single-precision / and sqrt correctly is asked to, in every program and
+ * both precisions (cl_build_program): PoCL's / and sqrt are the CPU's either way, so the
+ * bit-for-bit agreement above cannot show the option missing, but the programs' build options
+ * do. A device without the capability must not be given it (the specification allows only those
+ * that report it).
+ */
+TEST(programs_ask_for_correctly_rounded_single_precision)
+{
+    pd_device *dev = NULL;
+    pd_error err = {0};
+    if (pd_device_open(-1, &dev, &err) != PD_OK) {
+        TEST_FAILF("no OpenCL device: %s", err.msg);
+        return;
+    }
+    const char *opt = "-cl-fp32-correctly-rounded-divide-sqrt";
+    const struct {
+        const char *name;
+        int variant;
+    } progs[] = {{"integrate", 0}, {"contact", CL_PLACES}, {"integrate", CL_DOUBLE}};
+    for (int i = 0; i < 3; i++) {
+        if ((progs[i].variant & CL_DOUBLE) && !pd_device_has_fp64(dev)) continue;
+        cl_program prog;
+        if (cl_program_get(dev, progs[i].name, progs[i].variant, &prog, &err) != PD_OK) {
+            TEST_FAILF("%s: %s", progs[i].name, err.msg);
+            continue;
+        }
+        char opts[512] = {0};
+        CHECK_EQ_INT(CL_SUCCESS, clGetProgramBuildInfo(prog, dev->device, CL_PROGRAM_BUILD_OPTIONS,
+                                                       sizeof opts - 1, opts, NULL));
+        printf("  %s (variant %d): \"%s\"\n", progs[i].name, progs[i].variant, opts);
+        CHECK_EQ_INT(pd_device_fp32_rounded(dev), strstr(opts, opt) != NULL);
+    }
+    pd_device_close(dev);
+}
+
 TEST(bad_pose_is_an_error_not_a_nan)
 {
     pd_mesh *c = builtin("cube", 0);
@@ -1959,6 +1996,7 @@ int main(void)
     RUN(separate_places_of_a_u_on_a_tilted_slab);
     RUN(places_agree_when_the_solids_swap);
     RUN(opencl_kernel_agrees_with_host);
+    RUN(programs_ask_for_correctly_rounded_single_precision);
     RUN(bad_pose_is_an_error_not_a_nan);
     /* last: they draw from the shared random sequence, and the tests above keep their samples */
     RUN(vertex_clusters_bound_their_vertices);
