@@ -909,7 +909,19 @@ PD_STAGE_FN void ovl_sum(ovl_ctx *c, ovl_sums *s)
         /* coplanar faces may have been owned by one side only: repeat with -w and average */
         int store = c->store_pts;
         c->flip = 1;
-        c->store_pts = 0;
+        /*
+         * The nodes (for the depth and the guards on the nodes' box) are the +w pass's. Where
+         * it had none, its ties having put B's faces just off A's, the -w pass's are stored
+         * instead: faces 3.8 resolutions apart in a single-precision lattice of cubes summed
+         * the slab in the -w pass alone, and with no node the contact got half its volume and
+         * a depth of 0, so no force (tests/physics/test_single_narrow.c,
+         * nodes_of_the_pass_that_found_the_overlap). OVL_PLACES' sums per node are a +w
+         * pass's, so ovl_places then answers with one place.
+         */
+        if (store && c->npts == 0 && !c->pts_overflow)
+            c->pts_flip = 1; /* and store_pts stays on */
+        else
+            c->store_pts = 0;
         ovl_pass(c);
         pd_v3 s2 = v3_sub(c->area_a, c->area_b);
         pd_real open2 = v3_norm(v3_add(c->area_a, c->area_b));
@@ -1073,7 +1085,7 @@ PD_STAGE_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
     o->vol_eff = o->volume;
     o->depth_eff = o->depth;
     o->point_eff = o->centroid;
-    if (!OVL_PLACES_BUILD || !c->places || c->pts_overflow || c->npts < 2) return;
+    if (!OVL_PLACES_BUILD || !c->places || c->pts_overflow || c->pts_flip || c->npts < 2) return;
     ovl_places_join(c);
     PD_GLOBAL int *par = ovl_ndi(c, OVL_ND_PAR);
     /* each place's volume and eq. 4.19 vector, summed into its root's (the smallest index) */
@@ -1407,7 +1419,7 @@ PD_STAGE_FN int ovl_compute_try(const ovl_in *in, ovl_out *o, pd_real *pad_out, 
     c->bnd_b = c->bnd_a + 2 * ovl_nclusters(in->nva);
     c->sweep = c->sweep_axis = 0;
     c->sweep_width = PD_R(0);
-    c->npts = c->pts_overflow = 0;
+    c->npts = c->pts_overflow = c->pts_flip = 0;
     c->store_pts = 1;
     /* OVL_PLACES: its scratch follows the usual */
     c->places = OVL_PLACES_BUILD && (in->flags & OVL_PLACES) != 0;
@@ -1818,7 +1830,7 @@ refilter:
             if (s > c->hi) c->hi = s;
         }
     } else {
-        c->flip = 0;
+        c->flip = c->pts_flip; /* the pass whose nodes were stored */
         c->depth_mode = 1;
         ovl_pass(c);
     }

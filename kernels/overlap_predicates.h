@@ -261,6 +261,7 @@ typedef struct ovl_ctx {
     PD_GLOBAL int *sweep_ord;
     PD_GLOBAL pd_real *sweep_key;
     int npts, pts_overflow, store_pts;
+    int pts_flip; /* the nodes stored are the -w pass's (ovl_sum: the +w pass had none) */
     /*
      * OVL_PLACES. Every node gets an index in the order a pass emits them (inode counts; a pass
      * without flip emits the same nodes in the same order). Per stored node, in pts_cap-long
