@@ -1679,9 +1679,17 @@ refilter:
      * a size deep (a Schönhardt corner in another's notch, tests/physics/test_sim.c). When the
      * sum is that small against its terms, the cusps are summed again about the centre of the
      * nodes' box, which holds the overlap (a polyhedron lies in its vertices' hull): each cusp
-     * is then of the order of the overlap. In double precision this is below 2e-12 of the
-     * terms, and rare. In single precision nearly every touching pair of a settled bed takes it
-     * (bench/RESULTS.md), unless the caller gives a better first origin (OVL_ORIGIN).
+     * is then of the order of the overlap. The sum's rounding is about eps vol_abs, so the
+     * volume's relative error is about eps vol_abs / vol, and the centroid's error that times
+     * the cusps' reach from the origin. Double precision sums again below 1e-8 of the terms
+     * (OVL_RESUM: errors up to ~1e-8 of the volume, and ~2e-8 of the reach in the centroid): a
+     * 1 mm cube wholly inside a 10 m one, summed about the big one's centre at 2.4e-11 of the
+     * terms, came out 5.4e-6 too large with its centroid 0.5 mm off
+     * (tests/physics/test_overlap.c, small_solid_inside_a_large_one). At 1e-6, a tenth of
+     * bench/overlap's Schonhardt pairs (a corner 1 % deep) summed twice, +8 % of instructions;
+     * at 1e-8, 1 %. Single precision's 1e4 eps is 1.2e-3: nearly every touching pair of a
+     * settled bed takes it (bench/RESULTS.md), unless the caller gives a better first origin
+     * (OVL_ORIGIN).
      */
     int nodes_known = c->npts > 0 && !c->pts_overflow;
     pd_v3 nlo = v3(0, 0, 0), nhi = nlo; /* the nodes' box */
@@ -1693,7 +1701,7 @@ refilter:
             nhi = v3(pd_max(nhi.x, p.x), pd_max(nhi.y, p.y), pd_max(nhi.z, p.z));
         }
     }
-    if (!(sm.vol > PD_R(1e4) * PD_EPS * sm.vol_abs) && nodes_known) {
+    if (!(sm.vol > OVL_RESUM * sm.vol_abs) && nodes_known) {
         c->origin = v3_scale(v3_add(nlo, nhi), PD_R(0.5));
         c->store_pts = 0; /* the same nodes */
         ovl_sum(c, &sm);

@@ -319,6 +319,14 @@ PD_FN PD_GLOBAL pd_real *ovl_ndr(const ovl_ctx *c, int k)
  * pose transform and the determinant adds about ten more; 64 ulps leaves a margin. */
 #define OVL_SNAP (PD_R(64) * PD_EPS)
 
+/* Ratio of a sum of cusps to their magnitudes below which ovl_compute_try sums them again about
+ * the overlap's own centre (see there): the sum's relative rounding is about eps over it. */
+#if PD_DOUBLE
+#define OVL_RESUM PD_R(1e-8)
+#else
+#define OVL_RESUM (PD_R(1e4) * PD_EPS)
+#endif
+
 /*
  * How many resolutions (pad) every culling test gives away: the half-planes of eq. 5.5, the box
  * where A n B lies, the pair loop's triangle boxes and the casts' ray boxes. A plane predicate

@@ -314,6 +314,32 @@ TEST(contained_solid_takes_the_centre_line)
     pd_mesh_destroy(small);
 }
 
+/*
+ * A 1 mm cube wholly inside a 10 m one, 2 m from its centre, either way round. About the big
+ * cube's centre the cusps reach ~10 m and sum to ~2.4e-11 of their magnitudes, so their rounding
+ * is ~1e-5 of the volume: the volume came out 5.4e-6 too large and the centroid 0.5 mm (half the
+ * small cube) off, while with A and B swapped both were exact. The sums are now taken again about
+ * the overlap's own centre below 1e-8 of the terms (OVL_RESUM). Tolerances: the small cube's
+ * corners are known in A's frame to the rounding of coordinates ~2 m, 4.4e-16 m, which moves its
+ * faces by 4.4e-13 of its side and its volume by ~1.3e-12 relative: 1e-11 relative, 1e-13 m.
+ */
+TEST(small_solid_inside_a_large_one)
+{
+    pd_mesh *big = box(0, 0, 0, 10, 10, 10), *small = box(0, 0, 0, 1e-3, 1e-3, 1e-3);
+    pd_pose pb = pose(2, 2, 2, 1, 0, 0, 0);
+    pd_contact ab = overlap(big, ORIGIN, small, pb, 0), ba = overlap(small, pb, big, ORIGIN, 0);
+    CHECK(ab.hit && ba.hit);
+    CHECK_REL(1e-9, ab.volume, 1e-11);
+    CHECK_REL(1e-9, ba.volume, 1e-11);
+    CHECK_VEC(2.0005, 2.0005, 2.0005, ab.centroid, 1e-13);
+    CHECK_VEC(2.0005, 2.0005, 2.0005, ba.centroid, 1e-13);
+    /* the small cube's extent along either normal (the centre line: a diagonal) */
+    CHECK_NEAR(sqrt(3) * 1e-3, ab.depth, 1e-13);
+    CHECK_NEAR(ab.depth, ba.depth, 1e-13);
+    pd_mesh_destroy(big);
+    pd_mesh_destroy(small);
+}
+
 TEST(edge_on_edge_crossing)
 {
     /* B = cube turned 90 degrees about x then shifted so its edges lie exactly on A's edges
@@ -1975,6 +2001,7 @@ int main(void)
     RUN(vertex_exactly_on_face);
     RUN(identical_coincident_shapes);
     RUN(contained_solid_takes_the_centre_line);
+    RUN(small_solid_inside_a_large_one);
     RUN(edge_on_edge_crossing);
     RUN(near_degenerate_poses_from_rounding);
     RUN(swap_gives_same_volume_and_opposite_normal);
