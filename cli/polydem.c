@@ -7,11 +7,15 @@
  *   polydem validate SCENARIO.json [--json]
  *   polydem run SCENARIO.json -o OUT.h5 [--device N] [--quiet] [--meshes]
  *   polydem devices [--json]
+ *   polydem COMMAND --help
  *
  * Output is one JSON object on stdout, SI units, full double precision. Bad arguments or meshes
- * print a message on stderr and exit 2.
+ * print a message on stderr and exit 2; output that cannot be written (a full disk, a closed
+ * stdout) exits 1 with a message.
  */
 #include <errno.h>
+#include <fcntl.h>
+#include <limits.h>
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -23,57 +27,117 @@
 #include "polydem.h"
 
 #define EXIT_USAGE 2
+#define EXIT_OUTPUT 1 /* stdout could not be written: as a run whose result write fails */
 
-static const char *usage_text =
-    "usage: polydem <command> [options]\n"
-    "\n"
-    "commands:\n"
-    "  overlap A B [--pose-a \"x y z qw qx qy qz\"] [--pose-b \"...\"] [--opencl] [--single]\n"
-    "              [--no-filter] [--device N]\n"
-    "      exact overlap of two closed meshes (STL, OBJ or builtin:NAME); prints\n"
-    "      {\"volume\": m^3, \"centroid\": [m], \"normal\": [unit, A into B], \"depth\": m,\n"
-    "       \"places\": n, \"effective_volume\": m^3, \"effective_depth\": m,\n"
-    "       \"effective_point\": [m]}\n"
-    "      or {\"volume\": 0} when they do not overlap. Poses default to \"0 0 0 1 0 0 0\".\n"
-    "      places: the overlap's separate parts; effective_*: what \"contact_places\":\n"
-    "      \"separate\" gives the force law, and where its force acts (docs/SCENARIO.md).\n"
-    "  mesh-info FILE|builtin:NAME[:TRIANGLES[:SEED]]\n"
-    "      triangles, vertices, volume, centroid, inertia and principal moments\n"
-    "      (inertia per unit density, m^5 = kg m^2 at 1 kg/m^3)\n"
-    "\n"
-    "  validate SCENARIO.json [--json]\n"
-    "      checks a scenario: every error with its JSON path (exit 1), or the particle count,\n"
-    "      memory estimate and stable time step\n"
-    "  run SCENARIO.json -o OUT.h5 [--device N] [--quiet] [--meshes | --no-meshes]\n"
-    "      runs a scenario on an OpenCL device (default: the first GPU, else the first\n"
-    "      device); writes the HDF5 result and OUT.h5.xmf for ParaView, with every\n"
-    "      particle's surface per frame when there are polyhedra and that adds at most\n"
-    "      256 MiB (--meshes: always, --no-meshes: never); a progress bar on a terminal;\n"
-    "      Ctrl-C cancels, keeping the frames so far (root attribute status = \"cancelled\")\n"
-    "  devices [--json]\n"
-    "      the OpenCL devices; N is what --device N takes\n"
-    "\n"
+typedef struct command command;
+struct command {
+    const char *name;
+    int (*run)(const command *cmd, int argc, char **argv);
+    /* the synopsis after the name, a '\n' continuing it under the first argument */
+    const char *args;
+    const char *about; /* what it does and prints, in lines */
+    int meshes;        /* takes mesh arguments: its help lists the builtin shapes */
+};
+
+static const char builtin_shapes[] =
     "builtin shapes: cube, tetrahedron, schonhardt, icosphere[:20|80|320|1280|5120],\n"
     "                rock[:TRIANGLES[:SEED]]\n";
 
+/* cmd's synopsis after lead, its continuation lines lined up under its first argument */
+static void print_synopsis(FILE *f, const char *lead, const command *cmd)
+{
+    int indent = (int)(strlen(lead) + strlen(cmd->name) + 1);
+    fprintf(f, "%s%s ", lead, cmd->name);
+    for (const char *p = cmd->args; *p; p++) {
+        fputc(*p, f);
+        if (*p == '\n') fprintf(f, "%*s", indent, "");
+    }
+    fputc('\n', f);
+}
+
+static void print_about(FILE *f, const command *cmd, int indent)
+{
+    for (const char *p = cmd->about; *p;) {
+        size_t n = strcspn(p, "\n");
+        fprintf(f, "%*s%.*s\n", indent, "", (int)n, p);
+        p += n + (p[n] == '\n');
+    }
+}
+
+/* `polydem COMMAND --help`: that command's usage on stdout, exit 0 */
+static int print_help(const command *cmd)
+{
+    print_synopsis(stdout, "usage: polydem ", cmd);
+    printf("\n");
+    print_about(stdout, cmd, 2);
+    if (cmd->meshes) printf("\n%s", builtin_shapes);
+    return 0;
+}
+
+static int is_help(const char *a)
+{
+    return !strcmp(a, "-h") || !strcmp(a, "--help");
+}
+
+/*
+ * Copies s[0..n) into out[len] as a message can show it: control characters as \t, \n, \r or
+ * \xHH, and backslash and double quote escaped, so that a quoted argument reads unambiguously
+ * and a stray \r or terminal escape in it cannot redraw the line; cut short with "..." where out
+ * is too small. Returns out.
+ */
+static const char *shown(const char *s, size_t n, char *out, size_t len)
+{
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++) {
+        unsigned char c = (unsigned char)s[i];
+        char e[8] = {(char)c, '\0'};
+        if (c == '\\' || c == '"')
+            snprintf(e, sizeof e, "\\%c", c);
+        else if (c == '\t' || c == '\n' || c == '\r')
+            snprintf(e, sizeof e, "\\%c", c == '\t' ? 't' : c == '\n' ? 'n' : 'r');
+        else if (c < 0x20 || c == 0x7f)
+            snprintf(e, sizeof e, "\\x%02x", c);
+        size_t m = strlen(e);
+        if (k + m + 4 > len) { /* room for "..." and the terminator */
+            memcpy(out + k, "...", 3);
+            k += 3;
+            break;
+        }
+        memcpy(out + k, e, m);
+        k += m;
+    }
+    out[k] = '\0';
+    return out;
+}
+
+/* fmt's two %s, a and b, are command-line text: shown() escapes them */
 static int fail(const char *fmt, const char *a, const char *b)
 {
+    char ea[512], eb[512];
     fprintf(stderr, "polydem: ");
-    fprintf(stderr, fmt, a, b);
+    fprintf(stderr, fmt, shown(a, strlen(a), ea, sizeof ea), shown(b, strlen(b), eb, sizeof eb));
     fprintf(stderr, "\n");
     return EXIT_USAGE;
 }
 
+/* Separates a pose's numbers. Whitespace of every kind: a value pasted from a file or a shell's
+ * $(...) brings a trailing \n or \r\n, and strtod already skipped any before a number. */
+static int is_sep(char c)
+{
+    return c && strchr(" \t\n\v\f\r,", c) != NULL;
+}
+
 /*
- * Parses exactly n finite numbers separated by blanks or commas. Returns 0, or -1 with why in
+ * Parses exactly n finite numbers separated by whitespace or commas. Returns 0, or -1 with why in
  * why[len] ("number 3 of 7, \"nan\", is not finite"). A number too small to hold, like 1e-320,
  * is taken as the nearest representable one (strtod's ERANGE on underflow), not refused.
  */
 static int parse_numbers(const char *s, double *out, int n, char *why, size_t len)
 {
     const char *p = s;
+    char tok[64];
     for (int i = 0; i < n; i++) {
-        while (*p == ' ' || *p == '\t' || *p == ',')
+        while (is_sep(*p))
             p++;
         if (!*p) {
             snprintf(why, len, "got %d", i);
@@ -83,18 +147,21 @@ static int parse_numbers(const char *s, double *out, int n, char *why, size_t le
         errno = 0;
         out[i] = strtod(p, &end);
         if (end == p) {
-            snprintf(why, len, "number %d of %d, \"%.*s\", is not a number", i + 1, n,
-                     (int)strcspn(p, " \t,"), p);
+            size_t k = 0;
+            while (p[k] && !is_sep(p[k]))
+                k++;
+            snprintf(why, len, "number %d of %d, \"%s\", is not a number", i + 1, n,
+                     shown(p, k, tok, sizeof tok));
             return -1;
         }
         if (!isfinite(out[i]) || (errno == ERANGE && fabs(out[i]) > 1)) {
-            snprintf(why, len, "number %d of %d, \"%.*s\", is not finite", i + 1, n, (int)(end - p),
-                     p);
+            snprintf(why, len, "number %d of %d, \"%s\", is not finite", i + 1, n,
+                     shown(p, (size_t)(end - p), tok, sizeof tok));
             return -1;
         }
         p = end;
     }
-    while (*p == ' ' || *p == '\t' || *p == ',')
+    while (is_sep(*p))
         p++;
     if (*p) {
         char *end;
@@ -102,7 +169,8 @@ static int parse_numbers(const char *s, double *out, int n, char *why, size_t le
         if (end != p)
             snprintf(why, len, "got more than %d", n);
         else
-            snprintf(why, len, "\"%s\" after number %d is not a number", p, n);
+            snprintf(why, len, "\"%s\" after number %d is not a number",
+                     shown(p, strlen(p), tok, sizeof tok), n);
         return -1;
     }
     return 0;
@@ -111,10 +179,10 @@ static int parse_numbers(const char *s, double *out, int n, char *why, size_t le
 static int parse_pose(const char *flag, const char *s, pd_pose *pose)
 {
     double v[7];
-    char why[160];
+    char why[160], es[512];
     if (parse_numbers(s, v, 7, why, sizeof why) != 0) {
         fprintf(stderr, "polydem: %s: expected 7 numbers \"x y z qw qx qy qz\" (%s): \"%s\"\n",
-                flag, why, s);
+                flag, why, shown(s, strlen(s), es, sizeof es));
         return EXIT_USAGE;
     }
     if (pd_quat_normalize(v + 3, pose->q) != PD_OK)
@@ -124,17 +192,58 @@ static int parse_pose(const char *flag, const char *s, pd_pose *pose)
     return 0;
 }
 
-/* Writes s as a JSON string literal (quotes and control characters escaped). */
+/*
+ * Length of the well-formed UTF-8 sequence at s (RFC 3629: no overlong forms, no surrogates,
+ * nothing above U+10FFFF), or 0 where none starts there. Reads no further than a NUL.
+ */
+static int utf8_len(const unsigned char *s)
+{
+    unsigned char c = s[0], lo = 0x80, hi = 0xbf; /* the range of the second byte */
+    int n;
+    if (c < 0x80) return 1;
+    if (c < 0xc2) return 0; /* a continuation byte, or the lead of an overlong pair */
+    if (c < 0xe0) {
+        n = 2;
+    } else if (c < 0xf0) {
+        n = 3;
+        lo = c == 0xe0 ? 0xa0 : lo; /* overlong */
+        hi = c == 0xed ? 0x9f : hi; /* U+D800-DFFF, the surrogates */
+    } else if (c < 0xf5) {
+        n = 4;
+        lo = c == 0xf0 ? 0x90 : lo; /* overlong */
+        hi = c == 0xf4 ? 0x8f : hi; /* above U+10FFFF */
+    } else {
+        return 0;
+    }
+    if (s[1] < lo || s[1] > hi) return 0;
+    for (int k = 2; k < n; k++)
+        if (s[k] < 0x80 || s[k] > 0xbf) return 0;
+    return n;
+}
+
+/*
+ * Writes s as a JSON string literal: quotes, backslashes and control characters escaped, and
+ * each byte that is not part of well-formed UTF-8 (a file name is any bytes) written as U+FFFD,
+ * since JSON text must be UTF-8 and a parser refuses the whole document over one stray byte.
+ */
 static void json_str(const char *s)
 {
     putchar('"');
-    for (; *s; s++) {
-        if (*s == '"' || *s == '\\')
-            printf("\\%c", *s);
-        else if ((unsigned char)*s < 0x20)
-            printf("\\u%04x", *s);
-        else
-            putchar(*s);
+    for (const unsigned char *p = (const unsigned char *)s; *p;) {
+        int n = utf8_len(p);
+        if (n == 0) {
+            fputs("\\ufffd", stdout);
+            n = 1;
+        } else if (n > 1) {
+            fwrite(p, 1, (size_t)n, stdout);
+        } else if (*p == '"' || *p == '\\') {
+            printf("\\%c", *p);
+        } else if (*p < 0x20 || *p == 0x7f) {
+            printf("\\u%04x", *p);
+        } else {
+            putchar(*p);
+        }
+        p += n;
     }
     putchar('"');
 }
@@ -164,16 +273,93 @@ static void print_matrix(const char *key, const double m[3][3])
     printf("], ");
 }
 
-static int cmd_overlap(int argc, char **argv)
+/* A builtin spec's fault, the spec quoted: "'builtin:rock:80:x': seed 'x' is not a whole number" */
+static int spec_fail(const char *spec, const char *what, const char *field, const char *why)
+{
+    char es[512], ef[128];
+    fprintf(stderr, "polydem: '%s': %s", shown(spec, strlen(spec), es, sizeof es), what);
+    if (field) fprintf(stderr, " '%s'", shown(field, strlen(field), ef, sizeof ef));
+    fprintf(stderr, "%s\n", why);
+    return EXIT_USAGE;
+}
+
+/* A builtin spec's TRIANGLES or SEED field, f: digits only, from min to max. 0, or a message
+ * and 2. */
+static int spec_number(const char *spec, const char *what, const char *f, unsigned long min,
+                       unsigned long max, unsigned long *out)
+{
+    if (!*f) return spec_fail(spec, what, NULL, " is empty");
+    errno = 0;
+    *out = strtoul(f, NULL, 10);
+    if (strspn(f, "0123456789") != strlen(f))
+        return spec_fail(spec, what, f, " is not a whole number");
+    if (errno == ERANGE || *out > max) return spec_fail(spec, what, f, " is too large");
+    if (*out < min) /* 0 counts meant the default, unsaid */
+        return spec_fail(spec, what, f,
+                         " must be at least 1 (leave the field out for the default)");
+    return 0;
+}
+
+/*
+ * Opens a mesh argument: a file, or builtin:NAME[:TRIANGLES[:SEED]]. The builtin spec is read
+ * here, more strictly than pd_mesh_open reads it (an empty field or a count of 0 there means the
+ * default, and every shape is handed the seed that only the rock uses): on the command line a
+ * field that changes nothing is a mistake to report, as the scenario's "seed" on a cube is.
+ * Returns 0, or a message and 2.
+ */
+static int open_mesh(const char *spec, pd_mesh **m)
+{
+    static const char prefix[] = "builtin:";
+    pd_error err = {0};
+    *m = NULL;
+    if (strncmp(spec, prefix, sizeof prefix - 1) != 0) {
+        if (pd_mesh_open(spec, m, &err) == PD_OK) return 0;
+        fprintf(stderr, "polydem: %s\n", err.msg);
+        return EXIT_USAGE;
+    }
+    char *name = malloc(strlen(spec) + 1), *field[3] = {NULL, NULL, NULL};
+    if (!name) return fail("%s: out of memory%s", spec, "");
+    strcpy(name, spec + sizeof prefix - 1);
+    int nfields = 0, rc = EXIT_USAGE;
+    for (char *colon = strchr(name, ':'); colon && nfields < 3; colon = strchr(colon, ':')) {
+        *colon++ = '\0';
+        field[nfields++] = colon;
+    }
+    unsigned long tris = 0, seed = 1; /* the defaults pd_mesh_builtin and pd_mesh_open take */
+    if (nfields > 2) {
+        spec_fail(spec, "too many fields (expected builtin:NAME[:TRIANGLES[:SEED]])", NULL, "");
+        goto done;
+    }
+    if (field[0] && spec_number(spec, "triangle count", field[0], 1, INT_MAX, &tris)) goto done;
+    if (field[1] && strcmp(name, "rock") != 0) {
+        spec_fail(spec, "only builtin:rock takes a seed", NULL, "");
+        goto done;
+    }
+    if (field[1] && spec_number(spec, "seed", field[1], 0, UINT_MAX, &seed)) goto done;
+    if (pd_mesh_builtin(name, (int)tris, (unsigned)seed, m, &err) != PD_OK) {
+        fprintf(stderr, "polydem: %s\n", err.msg);
+        goto done;
+    }
+    rc = 0;
+done:
+    free(name);
+    return rc;
+}
+
+static int cmd_overlap(const command *cmd, int argc, char **argv)
 {
     const char *files[2] = {NULL, NULL};
-    int nfiles = 0, use_cl = 0, flags = 0, device = -1;
+    int nfiles = 0, use_cl = 0, flags = 0, device = -1, posed[2] = {0, 0};
     pd_pose pose[2] = {{{0, 0, 0}, {1, 0, 0, 0}}, {{0, 0, 0}, {1, 0, 0, 0}}};
     for (int i = 2; i < argc; i++) {
         const char *a = argv[i];
-        if (!strcmp(a, "--pose-a") || !strcmp(a, "--pose-b")) {
+        if (is_help(a)) {
+            return print_help(cmd);
+        } else if (!strcmp(a, "--pose-a") || !strcmp(a, "--pose-b")) {
+            int b = a[7] == 'b';
+            if (posed[b]++) return fail("overlap: %s given twice%s", a, "");
             if (i + 1 >= argc) return fail("%s: missing value%s", a, "");
-            if (parse_pose(a, argv[++i], &pose[a[7] == 'b'])) return EXIT_USAGE;
+            if (parse_pose(a, argv[++i], &pose[b])) return EXIT_USAGE;
         } else if (!strcmp(a, "--opencl")) {
             use_cl = 1;
         } else if (!strcmp(a, "--single")) {
@@ -182,6 +368,7 @@ static int cmd_overlap(int argc, char **argv)
             flags |= PD_OVERLAP_NO_FILTER;
         } else if (!strcmp(a, "--device")) {
             char *end;
+            if (device >= 0) return fail("overlap: %s given twice%s", a, "");
             if (i + 1 >= argc) return fail("%s: missing value%s", a, "");
             long d = strtol(argv[++i], &end, 10);
             if (*end || end == argv[i] || d < 0 || d > 1000)
@@ -205,10 +392,7 @@ static int cmd_overlap(int argc, char **argv)
     pd_contact c;
     int rc = EXIT_USAGE;
     for (int k = 0; k < 2; k++)
-        if (pd_mesh_open(files[k], &m[k], &err) != PD_OK) {
-            fprintf(stderr, "polydem: %s\n", err.msg);
-            goto done;
-        }
+        if (open_mesh(files[k], &m[k]) != 0) goto done;
     if (use_cl) {
         if (pd_device_open(device, &dev, &err) != PD_OK) {
             fprintf(stderr, "polydem: %s\n", err.msg);
@@ -246,16 +430,15 @@ done:
     return rc;
 }
 
-static int cmd_mesh_info(int argc, char **argv)
+static int cmd_mesh_info(const command *cmd, int argc, char **argv)
 {
+    /* no options but help: a file named -h is ./-h */
+    for (int i = 2; i < argc; i++)
+        if (is_help(argv[i])) return print_help(cmd);
     if (argc != 3)
         return fail("mesh-info: exactly one mesh expected (FILE or builtin:NAME)%s%s", "", "");
-    pd_error err = {0};
     pd_mesh *m = NULL;
-    if (pd_mesh_open(argv[2], &m, &err) != PD_OK) {
-        fprintf(stderr, "polydem: %s\n", err.msg);
-        return EXIT_USAGE;
-    }
+    if (open_mesh(argv[2], &m) != 0) return EXIT_USAGE;
     pd_mass_props mp;
     pd_mesh_mass_props(m, &mp);
     double lo[3], hi[3];
@@ -284,12 +467,14 @@ static int cmd_mesh_info(int argc, char **argv)
     return 0;
 }
 
-static int cmd_validate(int argc, char **argv)
+static int cmd_validate(const command *cmd, int argc, char **argv)
 {
     const char *file = NULL;
     int json = 0;
     for (int i = 2; i < argc; i++) {
-        if (!strcmp(argv[i], "--json"))
+        if (is_help(argv[i]))
+            return print_help(cmd);
+        else if (!strcmp(argv[i], "--json"))
             json = 1;
         else if (argv[i][0] == '-' && argv[i][1])
             return fail("validate: unknown option \"%s\"%s", argv[i], "");
@@ -434,16 +619,21 @@ static void print_diags(const char *file, const pd_diags *d, const pd_error *err
     if (d->n) fprintf(stderr, "%s: %d error%s\n", file, d->n, d->n == 1 ? "" : "s");
 }
 
-static int cmd_run(int argc, char **argv)
+static int cmd_run(const command *cmd, int argc, char **argv)
 {
     const char *file = NULL, *out = NULL;
     int device = -1, quiet = 0, meshes = 0;
     for (int i = 2; i < argc; i++) {
-        if (!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) {
+        if (is_help(argv[i])) {
+            return print_help(cmd);
+        } else if (!strcmp(argv[i], "-o") || !strcmp(argv[i], "--output")) {
+            if (out)
+                return fail("run: %s given twice (-o and --output are one option)%s", argv[i], "");
             if (++i >= argc) return fail("run: %s needs a file name%s", argv[i - 1], "");
             out = argv[i];
         } else if (!strcmp(argv[i], "--device")) {
             char *end;
+            if (device >= 0) return fail("run: --device given twice%s%s", "", "");
             if (++i >= argc) return fail("run: --device needs a number%s%s", "", "");
             long d = strtol(argv[i], &end, 10);
             if (*end || end == argv[i] || d < 0 || d > 1000)
@@ -451,10 +641,11 @@ static int cmd_run(int argc, char **argv)
             device = (int)d;
         } else if (!strcmp(argv[i], "--quiet")) {
             quiet = 1;
-        } else if (!strcmp(argv[i], "--meshes")) {
-            meshes = 1;
-        } else if (!strcmp(argv[i], "--no-meshes")) {
-            meshes = -1;
+        } else if (!strcmp(argv[i], "--meshes") || !strcmp(argv[i], "--no-meshes")) {
+            int want = argv[i][2] == 'm' ? 1 : -1;
+            if (meshes == -want) /* the later one used to win, unsaid */
+                return fail("run: --meshes and --no-meshes contradict each other%s%s", "", "");
+            meshes = want;
         } else if (argv[i][0] == '-' && argv[i][1]) {
             return fail("run: unknown option \"%s\"%s", argv[i], "");
         } else if (!file) {
@@ -529,11 +720,17 @@ static int cmd_run(int argc, char **argv)
     return rc == PD_OK ? 0 : 1;
 }
 
-static int cmd_devices(int argc, char **argv)
+static int cmd_devices(const command *cmd, int argc, char **argv)
 {
-    int json = argc == 3 && !strcmp(argv[2], "--json");
-    if (argc > 3 || (argc == 3 && !json))
-        return fail("devices: unexpected argument \"%s\" (only --json)%s", argv[argc - 1], "");
+    int json = 0;
+    for (int i = 2; i < argc; i++) {
+        if (is_help(argv[i]))
+            return print_help(cmd);
+        else if (!strcmp(argv[i], "--json"))
+            json = 1;
+        else
+            return fail("devices: unexpected argument \"%s\" (only --json)%s", argv[i], "");
+    }
     pd_device_info info[64];
     int n = 0;
     pd_error err = {0};
@@ -545,47 +742,139 @@ static int cmd_devices(int argc, char **argv)
     if (json) printf("[");
     for (int i = 0; i < n; i++) {
         const pd_device_info *d = &info[i];
-        if (json)
-            printf("%s{\"index\": %d, \"name\": \"%s\", \"platform\": \"%s\", \"type\": \"%s\", "
-                   "\"compute_units\": %d, \"global_mem_bytes\": %.0f, \"fp64\": %s, "
+        if (json) {
+            /* the names are the driver's: escaped as any other string */
+            printf("%s{\"index\": %d, \"name\": ", i ? ", " : "", d->index);
+            json_str(d->name);
+            printf(", \"platform\": ");
+            json_str(d->platform);
+            printf(", \"type\": ");
+            json_str(d->type);
+            printf(", \"compute_units\": %d, \"global_mem_bytes\": %.0f, \"fp64\": %s, "
                    "\"fp32_rounded\": %s}",
-                   i ? ", " : "", d->index, d->name, d->platform, d->type, d->compute_units,
-                   d->global_mem_bytes, d->fp64 ? "true" : "false",
+                   d->compute_units, d->global_mem_bytes, d->fp64 ? "true" : "false",
                    d->fp32_rounded ? "true" : "false");
-        else
+        } else {
             printf("%d: %s [%s, %s], %d compute units, %.1f GiB, %s%s\n", d->index, d->name,
                    d->platform, d->type, d->compute_units, d->global_mem_bytes / 1073741824.0,
                    d->fp64 ? "double and single precision" : "single precision only",
                    d->fp32_rounded ? ""
                                    : " (single precision's / and sqrt not correctly rounded: "
                                      "its overlaps may differ from the host's in the last bits)");
+        }
     }
     if (json) printf("]\n");
     return 0;
 }
 
-int main(int argc, char **argv)
+static const command commands[] = {
+    {"overlap", cmd_overlap,
+     "A B [--pose-a \"x y z qw qx qy qz\"] [--pose-b \"...\"]\n"
+     "[--opencl] [--single] [--no-filter] [--device N]",
+     "exact overlap of two closed meshes (STL, OBJ or builtin:NAME); prints\n"
+     "{\"volume\": m^3, \"centroid\": [m], \"normal\": [unit, A into B], \"depth\": m,\n"
+     " \"places\": n, \"effective_volume\": m^3, \"effective_depth\": m,\n"
+     " \"effective_point\": [m]}\n"
+     "or {\"volume\": 0} when they do not overlap. Poses default to \"0 0 0 1 0 0 0\".\n"
+     "places: the overlap's separate parts; effective_*: what \"contact_places\":\n"
+     "\"separate\" gives the force law, and where its force acts (docs/SCENARIO.md).",
+     1},
+    {"mesh-info", cmd_mesh_info, "FILE|builtin:NAME[:TRIANGLES[:SEED]]",
+     "triangles, vertices, volume, centroid, inertia and principal moments\n"
+     "(inertia per unit density, m^5 = kg m^2 at 1 kg/m^3)",
+     1},
+    {"validate", cmd_validate, "SCENARIO.json [--json]",
+     "checks a scenario: every error with its JSON path (exit 1), or the particle count,\n"
+     "memory estimate and stable time step",
+     0},
+    {"run", cmd_run, "SCENARIO.json -o OUT.h5 [--device N] [--quiet] [--meshes | --no-meshes]",
+     "runs a scenario on an OpenCL device (default: the first GPU, else the first\n"
+     "device); writes the HDF5 result and OUT.h5.xmf for ParaView, with every\n"
+     "particle's surface per frame when there are polyhedra and that adds at most\n"
+     "256 MiB (--meshes: always, --no-meshes: never); a progress bar on a terminal;\n"
+     "Ctrl-C cancels, keeping the frames so far (root attribute status = \"cancelled\")",
+     0},
+    {"devices", cmd_devices, "[--json]", "the OpenCL devices; N is what --device N takes", 0},
+};
+#define NCOMMANDS (int)(sizeof commands / sizeof commands[0])
+
+/* Every command's synopsis and what it does: on stdout for --help, with an error on stderr */
+static void print_usage(FILE *f)
+{
+    fputs("usage: polydem <command> [options]\n\ncommands:\n", f);
+    for (int k = 0; k < NCOMMANDS; k++) {
+        print_synopsis(f, "  ", &commands[k]);
+        print_about(f, &commands[k], 6);
+    }
+    fprintf(f, "  <command> --help\n      that command's usage\n\n%s", builtin_shapes);
+}
+
+/*
+ * Holds descriptors 0-2 open. Started with stdout closed (>&-), the first file opened after (a
+ * mesh, the result file, one of the OpenCL driver's) would become descriptor 1 and take what is
+ * printed for stdout. /dev/null opened read-only keeps the place: writes to it fail, and are
+ * reported as any failed write is (finish_stdout).
+ */
+static void hold_std_fds(void)
+{
+    for (int fd = 0; fd < 3; fd++)
+        if (fcntl(fd, F_GETFD) == -1 && errno == EBADF) {
+            int got = open("/dev/null", O_RDONLY); /* the lowest free descriptor: fd */
+            if (got < 0) return;
+            if (got != fd) { /* cannot happen: the lower ones are open */
+                close(got);
+                return;
+            }
+        }
+}
+
+/*
+ * Whether what was printed reached stdout: a full disk or a closed stdout must not pass for
+ * success, as scripts take the JSON from there. fclose as well as fflush, since a deferred write
+ * error (NFS) comes back only from close. Returns rc, or EXIT_OUTPUT after a message where rc
+ * was 0.
+ */
+static int finish_stdout(int rc)
+{
+    errno = 0;
+    int failed = fflush(stdout) != 0 || ferror(stdout), e = errno;
+    if (fclose(stdout) != 0 && !failed) {
+        failed = 1;
+        e = errno;
+    }
+    if (!failed) return rc;
+    fprintf(stderr, "polydem: writing the output failed%s%s\n", e ? ": " : "",
+            e ? strerror(e) : "");
+    return rc ? rc : EXIT_OUTPUT;
+}
+
+static int dispatch(int argc, char **argv)
 {
     if (argc < 2) {
-        fputs(usage_text, stderr);
+        print_usage(stderr);
         return EXIT_USAGE;
     }
     if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") || !strcmp(argv[1], "help")) {
-        fputs(usage_text, stdout);
+        print_usage(stdout);
         return 0;
     }
-    if (!strcmp(argv[1], "overlap")) return cmd_overlap(argc, argv);
-    if (!strcmp(argv[1], "mesh-info")) return cmd_mesh_info(argc, argv);
-    if (!strcmp(argv[1], "devices")) return cmd_devices(argc, argv);
-    if (!strcmp(argv[1], "validate")) return cmd_validate(argc, argv);
-    if (!strcmp(argv[1], "run")) {
-        int rc = cmd_run(argc, argv);
-        if (pd_results_unclosed()) { /* a full disk: HDF5's exit-time clean-up would crash */
-            fflush(NULL);
-            _exit(rc);
-        }
-        return rc;
-    }
-    fprintf(stderr, "polydem: unknown command \"%s\"\n\n%s", argv[1], usage_text);
+    for (int k = 0; k < NCOMMANDS; k++)
+        if (!strcmp(argv[1], commands[k].name)) return commands[k].run(&commands[k], argc, argv);
+    char e[512];
+    fprintf(stderr, "polydem: unknown command \"%s\"\n\n",
+            shown(argv[1], strlen(argv[1]), e, sizeof e));
+    print_usage(stderr);
     return EXIT_USAGE;
+}
+
+int main(int argc, char **argv)
+{
+    hold_std_fds();
+    int rc = finish_stdout(dispatch(argc, argv));
+    if (argc >= 2 && !strcmp(argv[1], "run") && pd_results_unclosed()) {
+        /* a full disk: HDF5's exit-time clean-up would crash */
+        fflush(NULL);
+        _exit(rc);
+    }
+    return rc;
 }

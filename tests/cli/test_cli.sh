@@ -277,4 +277,176 @@ if cat "$tmp/cube.stl" | $POLYDEM mesh-info /dev/stdin >"$tmp/pipe.out" 2>&1 &&
     grep -q '"triangles": 12' "$tmp/pipe.out"; then ok mesh_from_pipe
 else bad mesh_from_pipe "$(cat "$tmp/pipe.out")"; fi
 
+
+# 20. output that cannot be written is an error, exit 1 with a message, for every command that
+# prints on stdout (a full disk was exit 0 with the JSON lost); with stdout closed too
+cat >"$tmp/printers" <<'LIST'
+mesh_info|mesh-info builtin:cube
+overlap|overlap builtin:cube builtin:cube --pose-b 0.5,0,0,1,0,0,0
+overlap_apart|overlap builtin:cube builtin:cube --pose-b 2,0,0,1,0,0,0
+devices|devices
+devices_json|devices --json
+validate|validate examples/collision.json
+validate_json|validate examples/collision.json --json
+help|--help
+overlap_help|overlap --help
+LIST
+while IFS='|' read -r name args; do
+    if [ -c /dev/full ]; then
+        $POLYDEM $args </dev/null >/dev/full 2>"$tmp/wf"
+        rc=$?
+        if [ "$rc" -eq 1 ] && grep -q '^polydem: writing the output failed: No space left on device$' "$tmp/wf"; then
+            ok "output_full_$name"
+        else bad "output_full_$name" "exit $rc: $(cat "$tmp/wf")"; fi
+    fi
+    $POLYDEM $args </dev/null >&- 2>"$tmp/wc"
+    rc=$?
+    if [ "$rc" -eq 1 ] && grep -q '^polydem: writing the output failed' "$tmp/wc"; then
+        ok "output_closed_$name"
+    else bad "output_closed_$name" "exit $rc: $(cat "$tmp/wc")"; fi
+done <"$tmp/printers"
+[ -c /dev/full ] || echo "skip output_full tests: no /dev/full"
+# a run's summary line too: the result itself is written and kept
+if [ -c /dev/full ]; then
+    $POLYDEM run examples/collision.json -o "$tmp/full.h5" >/dev/full 2>"$tmp/wr"
+    rc=$?
+    if [ "$rc" -eq 1 ] && grep -q '^polydem: writing the output failed: No space left on device$' "$tmp/wr" &&
+        [ -s "$tmp/full.h5" ]; then
+        ok output_full_run
+    else bad output_full_run "exit $rc: $(cat "$tmp/wr")"; fi
+fi
+# a failure that printed nothing keeps its own exit status
+expect_fail output_closed_usage_error 2 "two meshes" -- sh -c '"$0" overlap builtin:cube >&-' "$POLYDEM"
+
+# 21. JSON strings are valid UTF-8 whatever the file name's bytes: valid UTF-8 passes through,
+# each byte of an ill-formed sequence (a stray byte, an overlong form, a surrogate, above
+# U+10FFFF, a sequence cut short) becomes U+FFFD; quotes and control characters are escaped
+if command -v python3 >/dev/null; then
+    ff=$tmp/$(printf 'cube_\377.obj')
+    cp "$tmp/two.obj" "$ff"
+    $POLYDEM mesh-info "$ff" >"$tmp/u1" 2>&1
+    rc=$?
+    if [ "$rc" -eq 0 ] && python3 -c 'import json, sys
+sys.exit(json.load(sys.stdin)["mesh"] != sys.argv[1] + "/cube_\ufffd.obj")' "$tmp" <"$tmp/u1"; then
+        ok mesh_info_json_invalid_utf8
+    else bad mesh_info_json_invalid_utf8 "exit $rc: $(od -c "$tmp/u1" | head -n 5)"; fi
+    ff=$tmp/$(printf 'u_\303\251\342\202\254\360\237\230\200_\300\257_\355\240\200_\364\220\200\200_\342\202_\377_"\\\001\177.obj')
+    cp "$tmp/two.obj" "$ff"
+    $POLYDEM mesh-info "$ff" >"$tmp/u2" 2>&1
+    rc=$?
+    if [ "$rc" -eq 0 ] && python3 -c 'import json, sys
+want = sys.argv[1] + "/u_\u00e9\u20ac\U0001f600_" + "\ufffd" * 2 + "_" + "\ufffd" * 3 + "_" + \
+    "\ufffd" * 4 + "_" + "\ufffd" * 2 + "_\ufffd_\"\\\u0001\u007f.obj"
+sys.exit(json.load(sys.stdin)["mesh"] != want)' "$tmp" <"$tmp/u2"; then
+        ok mesh_info_json_utf8_each_bad_byte
+    else bad mesh_info_json_utf8_each_bad_byte "exit $rc: $(od -c "$tmp/u2" | head -n 8)"; fi
+else echo "skip UTF-8 tests: no python3"; fi
+
+# 22. --help or -h after any command: that command's usage on stdout, exit 0 (overlap took it for
+# an unknown option, mesh-info for a file); every command the general usage lists
+cmds=$($POLYDEM --help | sed -n 's/^  \([a-z][a-z-]*\) .*/\1/p')
+[ -n "$cmds" ] || bad help_lists_commands "$($POLYDEM --help)"
+for c in $cmds; do
+    for h in --help -h; do
+        $POLYDEM "$c" $h >"$tmp/h1" 2>"$tmp/h2"
+        rc=$?
+        if [ "$rc" -eq 0 ] && head -n 1 "$tmp/h1" | grep -q "^usage: polydem $c " && [ ! -s "$tmp/h2" ]; then
+            ok "help_${c}_$h"
+        else bad "help_${c}_$h" "exit $rc: $(cat "$tmp/h1" "$tmp/h2")"; fi
+    done
+done
+# also after other arguments
+if $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 0 1 0 0 0" --help >"$tmp/h3" 2>&1 &&
+    grep -q '^usage: polydem overlap ' "$tmp/h3" && $POLYDEM mesh-info builtin:cube -h >"$tmp/h4" 2>&1 &&
+    grep -q '^usage: polydem mesh-info ' "$tmp/h4"; then
+    ok help_after_arguments
+else bad help_after_arguments "$(cat "$tmp/h3" "$tmp/h4")"; fi
+
+# 23. a pose's numbers may have whitespace of any kind around them (a trailing newline from a
+# file or $(...), a \r from a CRLF file were refused); junk is shown escaped, not as raw control
+# characters that redraw the terminal
+nl='
+'
+cr=$(printf '\r')
+esc=$(printf '\033')
+good=1
+for pose in "0.5 0 0 1 0 0 0$nl" "0.5 0 0 1 0 0 0$cr" "0.5 0 0 1 0 0 0$cr$nl" "$nl	 0.5${nl}0 0 1 0 0 0 "; do
+    $POLYDEM overlap builtin:cube builtin:cube --pose-a "0 0 0 1 0 0 0" --pose-b "$pose" >"$tmp/ws" 2>&1 &&
+        cmp -s "$tmp/ws" "$tmp/o1" || { good=0; bad pose_whitespace "$(printf '%s' "$pose" | od -c | head -n 1): $(cat "$tmp/ws")"; }
+done
+[ "$good" = 1 ] && ok pose_whitespace
+expect_fail pose_junk_escaped 2 '"\\x1b\[2J" after number 7 is not a number): "0.5 0 0 1 0 0 0 \\x1b\[2J"' -- \
+    $POLYDEM overlap builtin:cube builtin:cube --pose-b "0.5 0 0 1 0 0 0 $esc[2J"
+if grep -q "$esc" "$tmp/err"; then bad pose_junk_no_raw_escape "$(od -c "$tmp/err")"; else ok pose_junk_no_raw_escape; fi
+expect_fail pose_junk_control 2 'number 3 of 7, "\\x01", is not a number' -- \
+    $POLYDEM overlap builtin:cube builtin:cube --pose-b "0.5 0 $(printf '\001') 1 0 0 0"
+expect_fail pose_zero_quaternion_escaped 2 'quaternion "0 0 0 0 0 0 0\\r" has zero length' -- \
+    $POLYDEM overlap builtin:cube builtin:cube --pose-b "0 0 0 0 0 0 0$cr"
+if grep -q "$cr" "$tmp/err"; then bad pose_no_raw_cr "$(od -c "$tmp/err")"; else ok pose_no_raw_cr; fi
+
+# 24. an option with a value given twice is refused, naming it (the second silently replaced the
+# first); so are run's --meshes and --no-meshes together (the later one won)
+expect_fail overlap_pose_b_twice 2 'overlap: --pose-b given twice' -- \
+    $POLYDEM overlap builtin:cube builtin:cube --pose-b "0.5 0 0 1 0 0 0" --pose-b "1 0 0 1 0 0 0"
+expect_fail overlap_pose_a_twice 2 'overlap: --pose-a given twice' -- \
+    $POLYDEM overlap builtin:cube builtin:cube --pose-a "0 0 0 1 0 0 0" --pose-a "0 0 0 1 0 0 0"
+expect_fail overlap_device_twice 2 'overlap: --device given twice' -- \
+    $POLYDEM overlap builtin:cube builtin:cube --opencl --device 0 --device 0
+expect_fail run_output_twice 2 'run: -o given twice' -- \
+    $POLYDEM run examples/collision.json -o "$tmp/r1.h5" -o "$tmp/r2.h5"
+expect_fail run_output_long_and_short 2 'run: --output given twice' -- \
+    $POLYDEM run examples/collision.json -o "$tmp/r1.h5" --output "$tmp/r2.h5"
+expect_fail run_device_twice 2 'run: --device given twice' -- \
+    $POLYDEM run examples/collision.json -o "$tmp/r1.h5" --device 0 --device 0
+expect_fail run_meshes_and_no_meshes 2 'run: --meshes and --no-meshes contradict' -- \
+    $POLYDEM run examples/collision.json -o "$tmp/r1.h5" --meshes --no-meshes
+if [ -e "$tmp/r1.h5" ] || [ -e "$tmp/r2.h5" ]; then bad run_refused_writes_nothing "$(ls "$tmp")"
+else ok run_refused_writes_nothing; fi
+
+# 25. builtin specs: a field the shape does not take, and an empty, zero or non-numeric count or
+# seed, are refused naming the spec (a seed on an icosphere was ignored, a count of 0 taken as
+# the default, empty fields as defaults); the spellings in use still work
+expect_fail builtin_seed_on_icosphere 2 "'builtin:icosphere:80:3': only builtin:rock takes a seed" -- \
+    $POLYDEM mesh-info builtin:icosphere:80:3
+expect_fail builtin_seed_on_schonhardt 2 "'builtin:schonhardt:8:1': only builtin:rock takes a seed" -- \
+    $POLYDEM overlap builtin:schonhardt:8:1 builtin:cube
+expect_fail builtin_zero_count 2 "'builtin:icosphere:0': triangle count '0' must be at least 1" -- \
+    $POLYDEM mesh-info builtin:icosphere:0
+expect_fail builtin_empty_fields 2 "'builtin:rock::': triangle count is empty" -- $POLYDEM mesh-info builtin:rock::
+expect_fail builtin_empty_seed 2 "'builtin:rock:80:': seed is empty" -- $POLYDEM mesh-info builtin:rock:80:
+expect_fail builtin_empty_count 2 "'builtin:icosphere:': triangle count is empty" -- $POLYDEM mesh-info builtin:icosphere:
+expect_fail builtin_count_not_a_number 2 "'builtin:rock:8x': triangle count '8x' is not a whole number" -- \
+    $POLYDEM mesh-info builtin:rock:8x
+expect_fail builtin_seed_not_a_number 2 "'builtin:rock:80:-3': seed '-3' is not a whole number" -- \
+    $POLYDEM mesh-info builtin:rock:80:-3
+expect_fail builtin_seed_too_large 2 "'builtin:rock:80:4294967296': seed '4294967296' is too large" -- \
+    $POLYDEM mesh-info builtin:rock:80:4294967296
+expect_fail builtin_too_many_fields 2 "'builtin:rock:80:1:2': too many fields" -- $POLYDEM mesh-info builtin:rock:80:1:2
+expect_fail builtin_bad_fixed_count 2 "builtin:cube: bad triangle count 13" -- $POLYDEM mesh-info builtin:cube:13
+good=1
+for spec in builtin:cube builtin:cube:12 builtin:tetrahedron:4 builtin:schonhardt builtin:schonhardt:8 \
+    builtin:icosphere builtin:icosphere:320 builtin:rock builtin:rock:80 builtin:rock:80:3 \
+    builtin:rock:100:5 builtin:rock:80:0 builtin:rock:80:4294967295; do
+    $POLYDEM mesh-info "$spec" >"$tmp/b1" 2>&1 || { good=0; bad "builtin_valid $spec" "$(cat "$tmp/b1")"; }
+done
+[ "$good" = 1 ] && ok builtin_valid_spellings
+# the seed still picks the rock, and a field left out is the default
+for s in 80:3 80:4 "" 80:1; do
+    $POLYDEM mesh-info "builtin:rock${s:+:$s}" | sed 's/"mesh": "[^"]*", //' >"$tmp/rock$s"
+done
+if ! cmp -s "$tmp/rock80:3" "$tmp/rock80:4" && cmp -s "$tmp/rock" "$tmp/rock80:1" && [ -s "$tmp/rock" ]; then
+    ok builtin_seed_and_defaults
+else bad builtin_seed_and_defaults "$(cat "$tmp/rock80:3" "$tmp/rock80:4" "$tmp/rock" "$tmp/rock80:1")"; fi
+
+# 26. one solid wholly inside the other: the normal is the line from A's centroid to B's, not
+# from A's frame origin to B's (README): the box [0,2] x [0,1] x [0,3] holds the cube
+# [0.5,1] x [0.25,0.75] x [1,1.5], centroids (1, 0.5, 1.5) and (0.75, 0.5, 1.25)
+box_obj 0 0 0 2 1 3 0 >"$tmp/tall.obj"
+box_obj 0 0 0 0.5 0.5 0.5 0 >"$tmp/small.obj"
+$POLYDEM overlap "$tmp/tall.obj" "$tmp/small.obj" --pose-b "0.5 0.25 1 1 0 0 0" >"$tmp/in" 2>&1
+if near 0.125 "$(json_num "$tmp/in" volume)" 1e-12 && near -0.70710678118654757 "$(json_num "$tmp/in" normal 0)" 1e-12 &&
+    near 0 "$(json_num "$tmp/in" normal 1)" 1e-12 && near -0.70710678118654757 "$(json_num "$tmp/in" normal 2)" 1e-12; then
+    ok overlap_contained_normal_joins_centroids
+else bad overlap_contained_normal_joins_centroids "$(cat "$tmp/in")"; fi
+
 done_tests
