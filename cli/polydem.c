@@ -81,17 +81,17 @@ static int is_help(const char *a)
 
 /*
  * Copies s[0..n) into out[len] as a message can show it: control characters as \t, \n, \r or
- * \xHH, and backslash and double quote escaped, so that a quoted argument reads unambiguously
- * and a stray \r or terminal escape in it cannot redraw the line; cut short with "..." where out
- * is too small. Returns out.
+ * \xHH, so that a stray \r or terminal escape cannot redraw the line, and where quoted, backslash
+ * and double quote escaped too, so that a quoted argument reads unambiguously; cut short with
+ * "..." where out is too small. Returns out.
  */
-static const char *shown(const char *s, size_t n, char *out, size_t len)
+static const char *shown_as(const char *s, size_t n, char *out, size_t len, int quoted)
 {
     size_t k = 0;
     for (size_t i = 0; i < n; i++) {
         unsigned char c = (unsigned char)s[i];
         char e[8] = {(char)c, '\0'};
-        if (c == '\\' || c == '"')
+        if (quoted && (c == '\\' || c == '"'))
             snprintf(e, sizeof e, "\\%c", c);
         else if (c == '\t' || c == '\n' || c == '\r')
             snprintf(e, sizeof e, "\\%c", c == '\t' ? 't' : c == '\n' ? 'n' : 'r');
@@ -108,6 +108,12 @@ static const char *shown(const char *s, size_t n, char *out, size_t len)
     }
     out[k] = '\0';
     return out;
+}
+
+/* s[0..n) as a quoted argument (shown_as) */
+static const char *shown(const char *s, size_t n, char *out, size_t len)
+{
+    return shown_as(s, n, out, len, 1);
 }
 
 /* fmt's two %s, a and b, are command-line text: shown() escapes them */
@@ -273,77 +279,15 @@ static void print_matrix(const char *key, const double m[3][3])
     printf("], ");
 }
 
-/* A builtin spec's fault, the spec quoted: "'builtin:rock:80:x': seed 'x' is not a whole number" */
-static int spec_fail(const char *spec, const char *what, const char *field, const char *why)
-{
-    char es[512], ef[128];
-    fprintf(stderr, "polydem: '%s': %s", shown(spec, strlen(spec), es, sizeof es), what);
-    if (field) fprintf(stderr, " '%s'", shown(field, strlen(field), ef, sizeof ef));
-    fprintf(stderr, "%s\n", why);
-    return EXIT_USAGE;
-}
-
-/* A builtin spec's TRIANGLES or SEED field, f: digits only, from min to max. 0, or a message
- * and 2. */
-static int spec_number(const char *spec, const char *what, const char *f, unsigned long min,
-                       unsigned long max, unsigned long *out)
-{
-    if (!*f) return spec_fail(spec, what, NULL, " is empty");
-    errno = 0;
-    *out = strtoul(f, NULL, 10);
-    if (strspn(f, "0123456789") != strlen(f))
-        return spec_fail(spec, what, f, " is not a whole number");
-    if (errno == ERANGE || *out > max) return spec_fail(spec, what, f, " is too large");
-    if (*out < min) /* 0 counts meant the default, unsaid */
-        return spec_fail(spec, what, f,
-                         " must be at least 1 (leave the field out for the default)");
-    return 0;
-}
-
-/*
- * Opens a mesh argument: a file, or builtin:NAME[:TRIANGLES[:SEED]]. The builtin spec is read
- * here, more strictly than pd_mesh_open reads it (an empty field or a count of 0 there means the
- * default, and every shape is handed the seed that only the rock uses): on the command line a
- * field that changes nothing is a mistake to report, as the scenario's "seed" on a cube is.
- * Returns 0, or a message and 2.
- */
+/* Opens a mesh argument (a file, or builtin:NAME[:TRIANGLES[:SEED]]): 0, or a message and 2. */
 static int open_mesh(const char *spec, pd_mesh **m)
 {
-    static const char prefix[] = "builtin:";
     pd_error err = {0};
-    *m = NULL;
-    if (strncmp(spec, prefix, sizeof prefix - 1) != 0) {
-        if (pd_mesh_open(spec, m, &err) == PD_OK) return 0;
-        fprintf(stderr, "polydem: %s\n", err.msg);
-        return EXIT_USAGE;
-    }
-    char *name = malloc(strlen(spec) + 1), *field[3] = {NULL, NULL, NULL};
-    if (!name) return fail("%s: out of memory%s", spec, "");
-    strcpy(name, spec + sizeof prefix - 1);
-    int nfields = 0, rc = EXIT_USAGE;
-    for (char *colon = strchr(name, ':'); colon && nfields < 3; colon = strchr(colon, ':')) {
-        *colon++ = '\0';
-        field[nfields++] = colon;
-    }
-    unsigned long tris = 0, seed = 1; /* the defaults pd_mesh_builtin and pd_mesh_open take */
-    if (nfields > 2) {
-        spec_fail(spec, "too many fields (expected builtin:NAME[:TRIANGLES[:SEED]])", NULL, "");
-        goto done;
-    }
-    if (field[0] && spec_number(spec, "triangle count", field[0], 1, INT_MAX, &tris)) goto done;
-    if (field[1] && strcmp(name, "rock") != 0) {
-        spec_fail(spec, "only builtin:rock takes a seed", NULL, "");
-        goto done;
-    }
-    if (field[1] && spec_number(spec, "seed", field[1], 0, UINT_MAX, &seed)) goto done;
-    if (pd_mesh_builtin(name, (int)tris, (unsigned)seed, m, &err) != PD_OK) {
-        fprintf(stderr, "polydem: %s\n", err.msg);
-        goto done;
-    }
-    rc = 0;
-done:
-    free(name);
-    return rc;
+    if (pd_mesh_open(spec, m, &err) == PD_OK) return 0;
+    char e[1024];
+    /* the engine's message names the file, whose name may hold anything */
+    fprintf(stderr, "polydem: %s\n", shown_as(err.msg, strlen(err.msg), e, sizeof e, 0));
+    return EXIT_USAGE;
 }
 
 static int cmd_overlap(const command *cmd, int argc, char **argv)

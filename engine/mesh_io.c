@@ -654,6 +654,29 @@ int pd_mesh_load(const char *path, pd_mesh **out, pd_error *err)
 
 /* ---- specs --------------------------------------------------------------------------------- */
 
+/*
+ * A builtin spec's TRIANGLES or SEED field f (what: its name in messages): digits only, from min
+ * to max. A field that is there must say something: an empty one, or a count of 0, used to mean
+ * the default, unsaid.
+ */
+static int spec_number(const char *spec, const char *what, const char *f, unsigned long min,
+                       unsigned long max, unsigned long *out, pd_error *err)
+{
+    if (!*f) return pd_error_set(err, PD_EINVAL, "'%s': %s is empty", spec, what);
+    if (strspn(f, "0123456789") != strlen(f))
+        return pd_error_set(err, PD_EINVAL, "'%s': %s '%s' is not a whole number", spec, what, f);
+    errno = 0;
+    *out = strtoul(f, NULL, 10);
+    if (errno == ERANGE || *out > max)
+        return pd_error_set(err, PD_EINVAL, "'%s': %s '%s' is too large", spec, what, f);
+    if (*out < min)
+        return pd_error_set(err, PD_EINVAL,
+                            "'%s': %s '%s' must be at least %lu (leave the field out for the "
+                            "default)",
+                            spec, what, f, min);
+    return PD_OK;
+}
+
 int pd_mesh_open(const char *spec, pd_mesh **out, pd_error *err)
 {
     static const char prefix[] = "builtin:";
@@ -662,11 +685,12 @@ int pd_mesh_open(const char *spec, pd_mesh **out, pd_error *err)
     if (!spec) return pd_error_set(err, PD_EINVAL, "empty mesh spec");
     if (strncmp(spec, prefix, sizeof prefix - 1) != 0) return pd_mesh_load(spec, out, err);
 
-    /* builtin:NAME[:TRIANGLES[:SEED]], an empty field meaning the default */
+    /* builtin:NAME[:TRIANGLES[:SEED]]; a field that changes nothing (a seed on any shape but the
+     * rock, which alone is random) is a mistake to report, as the scenario's "seed" on a cube */
     char name[64], field[2][32];
     const char *s = spec + sizeof prefix - 1, *colon = strchr(s, ':');
     size_t n = colon ? (size_t)(colon - s) : strlen(s);
-    if (n >= sizeof name) return pd_error_set(err, PD_EINVAL, "%s: builtin name too long", spec);
+    if (n >= sizeof name) return pd_error_set(err, PD_EINVAL, "'%s': builtin name too long", spec);
     memcpy(name, s, n);
     name[n] = '\0';
     int nfields = 0;
@@ -674,33 +698,23 @@ int pd_mesh_open(const char *spec, pd_mesh **out, pd_error *err)
         s = colon + 1;
         colon = strchr(s, ':');
         n = colon ? (size_t)(colon - s) : strlen(s);
-        if (nfields == 2) {
+        if (nfields == 2)
             return pd_error_set(err, PD_EINVAL,
-                                "%s: too many fields (expected builtin:NAME[:TRIANGLES[:SEED]])",
+                                "'%s': too many fields (expected builtin:NAME[:TRIANGLES[:SEED]])",
                                 spec);
-        }
         if (n >= sizeof field[0])
-            return pd_error_set(err, PD_EINVAL, "%s: field '%s' too long", spec, s);
+            return pd_error_set(err, PD_EINVAL, "'%s': field '%s' too long", spec, s);
         memcpy(field[nfields], s, n);
         field[nfields++][n] = '\0';
     }
-    long tris = 0;
-    unsigned long seed = 1;
-    char *end;
-    if (nfields >= 1 && field[0][0]) {
-        errno = 0;
-        tris = strtol(field[0], &end, 10);
-        if (*end || errno == ERANGE || tris > INT_MAX || tris < 0 ||
-            strspn(field[0], "0123456789") != strlen(field[0]))
-            return pd_error_set(err, PD_EINVAL, "%s: bad triangle count '%s'", spec, field[0]);
-    }
-    if (nfields >= 2 && field[1][0]) {
-        errno = 0;
-        seed = strtoul(field[1], &end, 10);
-        if (*end || errno == ERANGE || seed > UINT_MAX ||
-            strspn(field[1], "0123456789") != strlen(field[1]))
-            return pd_error_set(err, PD_EINVAL, "%s: bad seed '%s'", spec, field[1]);
-    }
+    unsigned long tris = 0, seed = 1; /* pd_mesh_builtin's defaults */
+    int rc = PD_OK;
+    if (nfields >= 1) rc = spec_number(spec, "triangle count", field[0], 1, INT_MAX, &tris, err);
+    if (rc == PD_OK && nfields >= 2 && strcmp(name, "rock") != 0)
+        rc = pd_error_set(err, PD_EINVAL, "'%s': only builtin:rock takes a seed", spec);
+    if (rc == PD_OK && nfields >= 2)
+        rc = spec_number(spec, "seed", field[1], 0, UINT_MAX, &seed, err);
+    if (rc != PD_OK) return rc;
     return pd_mesh_builtin(name, (int)tris, (unsigned)seed, out, err);
 }
 

@@ -408,11 +408,18 @@ TEST(open_specs)
     if (a) CHECK_EQ_INT(320, a->ntris);
     pd_mesh_destroy(a);
     CHECK_EQ_INT(PD_EINVAL, pd_mesh_open("builtin:icosphere:abc", &a, &err));
-    CHECK_STR_CONTAINS(err.msg, "bad triangle count 'abc'");
+    CHECK_STR_CONTAINS(err.msg, "triangle count 'abc' is not a whole number");
     CHECK_EQ_INT(PD_EINVAL, pd_mesh_open("builtin:rock:80:1:2", &a, &err));
     CHECK_STR_CONTAINS(err.msg, "too many fields");
     CHECK_EQ_INT(PD_EINVAL, pd_mesh_open("builtin:rock:80:-3", &a, &err));
-    CHECK_STR_CONTAINS(err.msg, "bad seed");
+    CHECK_STR_CONTAINS(err.msg, "seed '-3' is not a whole number");
+    /* fields that say nothing, or nothing the shape takes, are refused, not defaulted */
+    CHECK_EQ_INT(PD_EINVAL, pd_mesh_open("builtin:icosphere:0", &a, &err));
+    CHECK_STR_CONTAINS(err.msg, "'builtin:icosphere:0': triangle count '0' must be at least 1");
+    CHECK_EQ_INT(PD_EINVAL, pd_mesh_open("builtin:rock::", &a, &err));
+    CHECK_STR_CONTAINS(err.msg, "triangle count is empty");
+    CHECK_EQ_INT(PD_EINVAL, pd_mesh_open("builtin:icosphere:80:3", &a, &err));
+    CHECK_STR_CONTAINS(err.msg, "only builtin:rock takes a seed");
     CHECK(a == NULL);
 }
 
