@@ -309,8 +309,8 @@ static int shell_contains(const double *verts, const int *tris, const int *shell
  * accepted), so shells that cut through each other are left to mesh_check_crossings; every shell
  * is oriented before the first wrong one is reported, so that check sees final orientations and
  * its clearer message can come first. Call on an outward mesh as a whole (total signed volume >
- * 0) with check_edges' sorted edges. On PD_OK or PD_EMESH, *shell_out holds each triangle's shell
- * (0, 1, ...; malloc'd).
+ * 0), or on one whose shells' volumes cancel (mesh_finish), with check_edges' sorted edges. On
+ * PD_OK or PD_EMESH, *shell_out holds each triangle's shell (0, 1, ...; malloc'd).
  */
 static int orient_shells(const double *verts, int nverts, int *tris, int ntris, const edge_rec *e,
                          const char *label, int **shell_out, pd_error *err)
@@ -504,6 +504,25 @@ int mesh_finish(double *verts, int nverts, int *tris, int ntris, const char *lab
             goto fail;
         }
     }
+    double blo[3], bhi[3], bd[3], reach = 0;
+    bbox(verts, nverts, blo, bhi);
+    sub3(bhi, blo, bd);
+    for (int j = 0; j < 3; j++)
+        reach = fmax(reach, fmax(fabs(blo[j]), fabs(bhi[j])));
+    if (reach > MESH_MAX_COORD) {
+        rc = pd_error_set(err, PD_EMESH,
+                          "%s: coordinates reach %g m from the origin (at most %g m: coordinates "
+                          "are metres)",
+                          label, reach, MESH_MAX_COORD);
+        goto fail;
+    }
+    if (!(sqrt(dot3(bd, bd)) >= MESH_MIN_SPAN)) {
+        rc = pd_error_set(err, PD_EMESH,
+                          "%s: the mesh spans %g m (its bounding box's diagonal; at least %g m: "
+                          "coordinates are metres)",
+                          label, sqrt(dot3(bd, bd)), MESH_MIN_SPAN);
+        goto fail;
+    }
     int nv = 0;
     if ((rc = mesh_weld(verts, nverts, tris, ntris, &nv)) != PD_OK) {
         rc = pd_error_set(err, rc, "%s: out of memory welding vertices", label);
@@ -518,6 +537,20 @@ int mesh_finish(double *verts, int nverts, int *tris, int ntris, const char *lab
     sub3(hi, lo, d);
     double diag = sqrt(dot3(d, d));
     double vol = mesh_signed_volume(verts, nv, tris, ntris);
+    if (!(fabs(vol) > 1e-12 * diag * diag * diag)) {
+        /* Parts facing opposite ways can cancel (an outward cube and an inward one of the same
+         * size): orient the shells first, as below, and measure again. Their nesting errors are
+         * left to the call below. */
+        pd_error ignored = {0};
+        int *shell = NULL;
+        if (orient_shells(verts, nv, tris, ntris, edges, label, &shell, &ignored) == PD_ENOMEM) {
+            rc = pd_error_set(err, PD_ENOMEM, "%s: out of memory finding shells", label);
+            free(edges);
+            goto fail;
+        }
+        free(shell);
+        vol = mesh_signed_volume(verts, nv, tris, ntris);
+    }
     if (!(fabs(vol) > 1e-12 * diag * diag * diag)) {
         rc = pd_error_set(err, PD_EMESH,
                           "%s: enclosed volume is zero (%g for a bounding box "

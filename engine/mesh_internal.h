@@ -12,6 +12,17 @@
 #define MESH_MAX_TRIS 10000000
 
 /*
+ * Coordinates are metres, and a mesh must lie within MESH_MAX_COORD of the origin and span at
+ * least MESH_MIN_SPAN (its bounding box's diagonal). Far beyond any granular material, both
+ * keep every number the engine forms finite and normal: the inertia tensor is a sum of fifth
+ * powers of coordinates (a cube of side 1e62 m gave an infinite and NaN tensor, one of 1e80 m
+ * overlapped its own translate by nothing), and a mesh of 1e-100 m was refused for a "zero
+ * area" triangle when its products underflowed.
+ */
+#define MESH_MAX_COORD 1e12
+#define MESH_MIN_SPAN 1e-12
+
+/*
  * Welds exactly equal vertices, drops unreferenced ones, validates (closed, edge-manifold,
  * consistently oriented, no zero-area triangles, positive volume, shells nested sensibly, no two
  * triangles crossing), flips an inward-oriented mesh or shell and wraps the result in a pd_mesh.

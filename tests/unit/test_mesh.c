@@ -679,6 +679,55 @@ TEST(shells_are_oriented_each)
     CHECK(m == NULL);
     CHECK_STR_CONTAINS(err.msg, "shells.stl: a shell (2 of 2");
     CHECK_STR_CONTAINS(err.msg, "lies inside another");
+    /* two equal boxes apart, the second facing inward: their volumes cancelled, and the file was
+     * refused as enclosing nothing (QA 2026-12-08) */
+    m = NULL;
+    const double c3[3] = {3, 0, 0};
+    CHECK_EQ_INT(PD_OK, two_boxes(h1, c1, h1, c3, 1, &m, &err));
+    if (m) {
+        pd_mass_props mp = props(m);
+        CHECK_NEAR(2, mp.volume, 1e-15);
+        CHECK_NEAR(1.5, mp.centroid[0], 1e-15);
+    }
+    pd_mesh_destroy(m);
+}
+
+/* Coordinates are metres, within 1e12 m of the origin and spanning at least 1e-12 m: beyond
+ * them the mass properties overflowed to inf and NaN (a cube of side 1e62 m), or a mesh of
+ * 1e-100 m was refused for a "zero area" triangle (QA 2026-12-08). Inside them, they are
+ * exact to rounding at both ends. */
+TEST(coordinates_within_range)
+{
+    const double scales[4] = {1e62, 1e13, 1e-13, 1e-100};
+    const char *needles[4] = {"coordinates reach 1e+62 m from the origin",
+                              "coordinates reach 1e+13 m from the origin",
+                              "the mesh spans 1.73205e-13 m", "the mesh spans 1.73205e-100 m"};
+    for (int k = 0; k < 4; k++) {
+        double v[24];
+        for (int i = 0; i < 8; i++)
+            for (int j = 0; j < 3; j++)
+                v[3 * i + j] = scales[k] * ((i >> j & 1) ? 1 : 0);
+        expect_reject(v, 8, cube_tris, 12, "scaled.obj", needles[k]);
+    }
+    const double ok[2] = {1e11, 1e-12};
+    for (int k = 0; k < 2; k++) {
+        double v[24];
+        for (int i = 0; i < 8; i++)
+            for (int j = 0; j < 3; j++)
+                v[3 * i + j] = ok[k] * ((i >> j & 1) ? 1 : 0);
+        pd_mesh *m = NULL;
+        pd_error err = {0};
+        CHECK_EQ_INT(PD_OK, pd_mesh_from_arrays(v, 8, cube_tris, 12, "scaled.obj", &m, &err));
+        if (m) {
+            pd_mass_props mp = props(m);
+            double s = ok[k], s5 = s * s * s * s * s;
+            CHECK_REL(s * s * s, mp.volume, 1e-14);
+            /* a cube's moment about its centre's axis: side^5 / 6 per unit density */
+            for (int j = 0; j < 3; j++)
+                CHECK_REL(s5 / 6, mp.principal[j], 1e-13);
+        }
+        pd_mesh_destroy(m);
+    }
 }
 
 /* ---- parts that cross or touch ------------------------------------------------------------ */
@@ -1167,6 +1216,7 @@ int main(void)
     RUN(reject_inconsistent_orientation);
     RUN(reject_zero_area);
     RUN(reject_zero_volume);
+    RUN(coordinates_within_range);
     RUN(reject_bad_files);
     RUN(reject_bad_builtins);
     for (int i = 0; i < ntmpfiles; i++)
