@@ -258,48 +258,157 @@ static int looks_like_text(const char *buf, size_t len)
 
 /* ---- ASCII STL ----------------------------------------------------------------------------- */
 
+/*
+ * ASCII STL is whitespace-separated tokens but for the solid's name, which is the rest of the
+ * `solid` (and `endsolid`) line. So the reader takes the file as one stream of tokens across line
+ * ends, not line by line: exporters and hand edits split facets anyhow (`outer` and `loop` on two
+ * lines were refused). Each token keeps its line for messages. A line ends at \n, at \r\n (one
+ * end, not two) and at a lone \r (classic Mac OS files, which read as one line whose solid's name
+ * ate every facet).
+ */
+typedef struct {
+    const char *p, *end;
+    int line; /* line of p */
+} stl_toks;
+
+static int stl_line_end(const stl_toks *st)
+{
+    return *st->p == '\n' || (*st->p == '\r' && (st->p + 1 == st->end || st->p[1] != '\n'));
+}
+
+/* Next token, across line ends; *line gets its line. Returns 0 at the end of the buffer. */
+static int stl_tok(stl_toks *st, const char **tok, size_t *len, int *line)
+{
+    for (; st->p < st->end && isspace((unsigned char)*st->p); st->p++)
+        st->line += stl_line_end(st);
+    if (st->p >= st->end) return 0;
+    const char *s = st->p;
+    while (st->p < st->end && !isspace((unsigned char)*st->p))
+        st->p++;
+    *tok = s;
+    *len = (size_t)(st->p - s);
+    *line = st->line;
+    return 1;
+}
+
+/*
+ * Skips a solid's name, the rest of the line, and says whether it holds 'facet' and after it
+ * 'vertex': a whole solid written on one line is all name, and reading it as facets would be a
+ * guess (a solid may be named "facet normal ..."), so the caller reports it when the solid ends
+ * with no facet.
+ */
+static int stl_skip_name(stl_toks *st)
+{
+    const char *s = st->p;
+    while (st->p < st->end && *st->p != '\n' && *st->p != '\r')
+        st->p++;
+    line_toks lt = {s, st->p};
+    const char *tok;
+    size_t tl;
+    int facet = 0;
+    while (next_tok(&lt, &tok, &tl)) {
+        if (tok_is(tok, tl, "facet")) facet = 1;
+        if (facet && tok_is(tok, tl, "vertex")) return 1;
+    }
+    return 0;
+}
+
+/* The message for a solid that ended with no facet, its name line holding 'facet ... vertex'. */
+static int stl_facets_in_name(const char *label, int line, pd_error *err)
+{
+    return pd_error_set(err, PD_EMESH,
+                        "%s:%d: the solid's name line holds 'facet ... vertex': the name runs to "
+                        "the end of its line, so the first facet must start on the next line",
+                        label, line);
+}
+
+static int stl_keyword(const char *tok, size_t len)
+{
+    static const char *const kw[] = {"solid", "endsolid", "facet",   "normal",  "outer",
+                                     "loop",  "vertex",   "endloop", "endfacet"};
+    for (size_t i = 0; i < sizeof kw / sizeof kw[0]; i++)
+        if (tok_is(tok, len, kw[i])) return 1;
+    return 0;
+}
+
 static int parse_stl_ascii(const char *label, const char *buf, size_t len, pd_mesh **out,
                            pd_error *err)
 {
     double *verts = NULL;
     int *tris = NULL;
-    size_t vcap = 0, tcap = 0, nv = 0, nt = 0;
-    enum { OUTSIDE, IN_SOLID, IN_FACET, IN_LOOP } state = OUTSIDE;
-    int loop_verts = 0, had_loop = 0, lineno = 0, rc = PD_OK;
-    const char *pos = buf, *end = buf + len;
-    while (pos < end) {
-        const char *le, *ls = next_line(&pos, end, &le), *tok;
-        size_t tl;
-        line_toks lt = {ls, le};
-        lineno++;
-        if (!next_tok(&lt, &tok, &tl)) continue;
+    size_t vcap = 0, tcap = 0, nv = 0, nt = 0, solid_nt = 0;
+    /* what comes next; AFTER_LOOP: the loop has ended, 'endfacet' must follow */
+    enum { OUTSIDE, IN_SOLID, IN_FACET, AFTER_OUTER, IN_LOOP, AFTER_LOOP } state = OUTSIDE;
+    static const char *const expected[] = {"'solid'", "'facet' or 'endsolid'", "'outer loop'",
+                                           "'loop'",  "'vertex' or 'endloop'", "'endfacet'"};
+    int loop_verts = 0, line = 1, rc = PD_OK;
+    int normal_kw = 0, normal = 0;      /* the facet's 'normal' read; how many of its values */
+    int name_line = 0, name_facets = 0; /* the solid's `solid` line; it holds 'facet ... vertex' */
+    int vertex_line = 0;                /* line of the last token when it ended a vertex, else 0 */
+    char show[41];
+    const char *tok;
+    size_t tl;
+    stl_toks st = {buf, buf + len, 1};
+    while (stl_tok(&st, &tok, &tl, &line)) {
+        int after_vertex = vertex_line;
+        vertex_line = 0;
         if (state == OUTSIDE && tok_is(tok, tl, "solid")) {
-            state = IN_SOLID; /* the rest of the line is the solid's name */
-        } else if (state == IN_SOLID && tok_is(tok, tl, "facet")) {
-            state = IN_FACET; /* the stored normal is ignored: orientation comes from order */
-            had_loop = 0;
-        } else if (state == IN_SOLID && tok_is(tok, tl, "endsolid")) {
-            state = OUTSIDE;
-        } else if (state == IN_FACET && !had_loop && tok_is(tok, tl, "outer") &&
-                   next_tok(&lt, &tok, &tl) && tok_is(tok, tl, "loop")) {
-            state = IN_LOOP;
-            loop_verts = 0;
-        } else if (state == IN_FACET && had_loop && tok_is(tok, tl, "endfacet")) {
+            name_line = line;
+            name_facets = stl_skip_name(&st);
+            solid_nt = nt;
             state = IN_SOLID;
-        } else if (state == IN_LOOP && tok_is(tok, tl, "vertex")) {
-            double x[3];
-            if (!tok_vec3(&lt, x)) {
-                rc = pd_error_set(err, PD_EMESH, "%s:%d: vertex needs 3 numbers", label, lineno);
+        } else if (state == IN_SOLID && tok_is(tok, tl, "facet")) {
+            state = IN_FACET;
+            normal = normal_kw = 0;
+        } else if (state == IN_SOLID && tok_is(tok, tl, "endsolid")) {
+            if (nt == solid_nt && name_facets) {
+                rc = stl_facets_in_name(label, name_line, err);
                 goto fail;
             }
+            stl_skip_name(&st);
+            state = OUTSIDE;
+        } else if (state == IN_FACET && tok_is(tok, tl, "outer")) {
+            state = AFTER_OUTER;
+        } else if (state == IN_FACET && !normal_kw && !normal && tok_is(tok, tl, "normal")) {
+            normal_kw = 1;
+        } else if (state == IN_FACET && !stl_keyword(tok, tl)) {
+            /* The stored normal is ignored (orientation comes from the vertices' order), so its
+             * tokens need not be numbers: exporters write NaN as "-nan", "nan" or MSVC's
+             * "1.#QNAN0" for degenerate facets, and some write no normal at all. */
+            if (++normal > 3) {
+                rc = pd_error_set(err, PD_EMESH,
+                                  "%s:%d: facet normal takes 3 numbers, found more ('%s')", label,
+                                  line, tok_show(tok, tl, show));
+                goto fail;
+            }
+        } else if (state == AFTER_OUTER && tok_is(tok, tl, "loop")) {
+            state = IN_LOOP;
+            loop_verts = 0;
+        } else if (state == IN_LOOP && tok_is(tok, tl, "vertex")) {
+            double x[3];
+            for (int k = 0; k < 3; k++) {
+                if (!stl_tok(&st, &tok, &tl, &line)) {
+                    rc = pd_error_set(
+                        err, PD_EMESH,
+                        "%s:%d: vertex needs 3 numbers, found %d before the end of the file", label,
+                        line, k);
+                    goto fail;
+                }
+                if (!tok_double(tok, tl, &x[k])) {
+                    rc = pd_error_set(err, PD_EMESH, "%s:%d: vertex needs 3 numbers, found '%s'",
+                                      label, line, tok_show(tok, tl, show));
+                    goto fail;
+                }
+            }
+            vertex_line = line;
             if (++loop_verts > 3) {
                 rc = pd_error_set(err, PD_EMESH, "%s:%d: facet with more than 3 vertices", label,
-                                  lineno);
+                                  line);
                 goto fail;
             }
             if (nv >= 3 * (size_t)MESH_MAX_TRIS) {
                 rc = pd_error_set(err, PD_EMESH, "%s:%d: too many triangles (the limit is %d)",
-                                  label, lineno, MESH_MAX_TRIS);
+                                  label, line, MESH_MAX_TRIS);
                 goto fail;
             }
             if (grow((void **)&verts, &vcap, 3 * (nv + 1), sizeof *verts)) goto oom;
@@ -308,24 +417,38 @@ static int parse_stl_ascii(const char *label, const char *buf, size_t len, pd_me
         } else if (state == IN_LOOP && tok_is(tok, tl, "endloop")) {
             if (loop_verts != 3) {
                 rc = pd_error_set(err, PD_EMESH, "%s:%d: facet with %d vertices (expected 3)",
-                                  label, lineno, loop_verts);
+                                  label, line, loop_verts);
                 goto fail;
             }
             if (grow((void **)&tris, &tcap, 3 * (nt + 1), sizeof *tris)) goto oom;
             for (int k = 0; k < 3; k++)
                 tris[3 * nt + k] = (int)(nv - 3 + (size_t)k);
             nt++;
-            state = IN_FACET;
-            had_loop = 1;
+            state = AFTER_LOOP;
+        } else if (state == AFTER_LOOP && tok_is(tok, tl, "endfacet")) {
+            state = IN_SOLID;
         } else {
-            char show[41];
-            rc = pd_error_set(err, PD_EMESH, "%s:%d: unexpected '%s' in ASCII STL", label, lineno,
-                              tok_show(tok, tl, show));
+            double x;
+            /* a fourth number, or a word other than a keyword on the vertex's line, reads as one
+             * more coordinate: say so rather than that the word is out of place */
+            if (after_vertex && !stl_keyword(tok, tl) &&
+                (line == after_vertex || tok_double(tok, tl, &x))) {
+                rc = pd_error_set(err, PD_EMESH, "%s:%d: vertex takes 3 numbers, found more ('%s')",
+                                  label, line, tok_show(tok, tl, show));
+            } else {
+                rc =
+                    pd_error_set(err, PD_EMESH, "%s:%d: unexpected '%s' in ASCII STL (expected %s)",
+                                 label, line, tok_show(tok, tl, show), expected[state]);
+            }
             goto fail;
         }
     }
-    if (state == IN_FACET || state == IN_LOOP) {
-        rc = pd_error_set(err, PD_EMESH, "%s:%d: file ends inside a facet", label, lineno);
+    if (state != OUTSIDE && state != IN_SOLID) {
+        rc = pd_error_set(err, PD_EMESH, "%s:%d: file ends inside a facet", label, line);
+        goto fail;
+    }
+    if (state == IN_SOLID && nt == solid_nt && name_facets) {
+        rc = stl_facets_in_name(label, name_line, err);
         goto fail;
     }
     return mesh_finish(verts, (int)nv, tris, (int)nt, label, out, err);

@@ -486,6 +486,156 @@ TEST(ascii_stl_loads)
     CHECK_STR_CONTAINS(err.msg, "bad_ascii.stl:4: vertex needs 3 numbers");
 }
 
+/* Writes text to a file of the temporary directory, loads it and removes it again (the STL
+ * reader's tests below write many small files, more than tmp_path keeps). */
+static int load_text(const char *name, const char *text, pd_mesh **m, pd_error *err)
+{
+    char p[128];
+    snprintf(p, sizeof p, "%s/%s", tmpdir, name);
+    FILE *f = fopen(p, "wb");
+    if (!f) {
+        TEST_FAILF("cannot write %s", p);
+        return PD_EIO;
+    }
+    fputs(text, f);
+    fclose(f);
+    *m = NULL;
+    int rc = pd_mesh_load(p, m, err);
+    remove(p);
+    return rc;
+}
+
+/* The tetrahedron (0,0,0) (1,0,0) (0,1,0) (0,0,1) as the four loops of an ASCII STL, volume 1/6. */
+#define TET_LOOP1 "outer loop\nvertex 0 0 0\nvertex 0 1 0\nvertex 1 0 0\nendloop\n"
+#define TET_LOOP2 "outer loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0 1\nendloop\n"
+#define TET_LOOP3 "outer loop\nvertex 0 0 0\nvertex 0 0 1\nvertex 0 1 0\nendloop\n"
+#define TET_LOOP4 "outer loop\nvertex 1 0 0\nvertex 0 1 0\nvertex 0 0 1\nendloop\n"
+
+/* A file that must load as the tetrahedron. */
+#define CHECK_TET_LOADS(name, text)                                                                \
+    do {                                                                                           \
+        pd_mesh *stl_m_ = NULL;                                                                    \
+        pd_error stl_e_ = {0};                                                                     \
+        if (load_text(name, text, &stl_m_, &stl_e_) != PD_OK) {                                    \
+            TEST_FAILF("%s: %s", name, stl_e_.msg);                                                \
+        } else {                                                                                   \
+            CHECK_EQ_INT(4, stl_m_->ntris);                                                        \
+            CHECK_NEAR(1.0 / 6, props(stl_m_).volume, 1e-16);                                      \
+        }                                                                                          \
+        pd_mesh_destroy(stl_m_);                                                                   \
+    } while (0)
+
+/* A file that must be refused with a message holding what (file name, line and reason). */
+#define CHECK_STL_REFUSED(name, text, what)                                                        \
+    do {                                                                                           \
+        pd_mesh *stl_m_ = NULL;                                                                    \
+        pd_error stl_e_ = {0};                                                                     \
+        CHECK_EQ_INT(PD_EMESH, load_text(name, text, &stl_m_, &stl_e_));                           \
+        CHECK_STR_CONTAINS(stl_e_.msg, what);                                                      \
+        CHECK(stl_m_ == NULL);                                                                     \
+        pd_mesh_destroy(stl_m_);                                                                   \
+    } while (0)
+
+/* A token left over on a line is an error naming the line and the token (it was ignored: a
+ * vertex of four numbers loaded as its first three); the facet's normal is ignored whatever it
+ * holds, as exporters write NaN (OpenSCAD's "-nan -inf inf", MSVC's "1.#QNAN0") or none, and
+ * the solid's name is the rest of its line. */
+TEST(ascii_stl_refuses_trailing_tokens)
+{
+    CHECK_STL_REFUSED("extra.stl",
+                      "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n"
+                      "vertex 0 1 0 EXTRA\nvertex 1 0 0\nendloop\nendfacet\nendsolid t\n",
+                      "extra.stl:5: vertex takes 3 numbers, found more ('EXTRA')");
+    CHECK_STL_REFUSED("extra4.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0 7\n",
+                      "extra4.stl:4: vertex takes 3 numbers, found more ('7')");
+    CHECK_STL_REFUSED("outer.stl", "solid t\nfacet normal 0 0 1\nouter loop junk\nvertex 0 0 0\n",
+                      "outer.stl:3: unexpected 'junk' in ASCII STL (expected 'vertex' or "
+                      "'endloop')");
+    CHECK_STL_REFUSED("endloop.stl",
+                      "solid t\nfacet normal 0 0 1\n" TET_LOOP1 "endfacet\nfacet\n"
+                      "outer loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 0 1\nendloop junk\n",
+                      "endloop.stl:14: unexpected 'junk' in ASCII STL (expected 'endfacet')");
+    CHECK_STL_REFUSED("endfacet.stl", "solid t\nfacet normal 0 0 1\n" TET_LOOP1 "endfacet junk\n",
+                      "endfacet.stl:8: unexpected 'junk' in ASCII STL (expected 'facet' or "
+                      "'endsolid')");
+    CHECK_STL_REFUSED("normal.stl", "solid t\nfacet normal 0 0 1 junk\n" TET_LOOP1 "endfacet\n",
+                      "normal.stl:2: facet normal takes 3 numbers, found more ('junk')");
+    CHECK_STL_REFUSED("noloop.stl", "solid t\nfacet normal 0 0 1\nvertex 0 0 0\n",
+                      "noloop.stl:3: unexpected 'vertex' in ASCII STL (expected 'outer loop')");
+    CHECK_STL_REFUSED("badnum.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 1,5 0\n",
+                      "badnum.stl:4: vertex needs 3 numbers, found '1,5'");
+    CHECK_TET_LOADS("normals.stl",
+                    "solid my part (copy 2) facet\n"
+                    "facet normal 0 0 0\n" TET_LOOP1 "endfacet\n"
+                    "  facet normal -nan -inf inf\n" TET_LOOP2 "endfacet\n"
+                    "facet normal 1.#QNAN0 1.#QNAN0 1.#QNAN0\n" TET_LOOP3 "endfacet\n"
+                    "facet\n" TET_LOOP4 "endfacet\n"
+                    "endsolid my part (copy 2) endfacet\n");
+}
+
+/* A lone CR ends a line (classic Mac OS files read as one line whose solid's name ate every
+ * facet: "no triangles"); CRLF stays one line end, so line numbers hold in both. */
+TEST(ascii_stl_cr_line_ends)
+{
+    CHECK_TET_LOADS("cr.stl", "solid t\rfacet normal 0 0 0\router loop\rvertex 0 0 0\r"
+                              "vertex 0 1 0\rvertex 1 0 0\rendloop\rendfacet\r"
+                              "facet normal 0 0 0\router loop\rvertex 0 0 0\rvertex 1 0 0\r"
+                              "vertex 0 0 1\rendloop\rendfacet\r"
+                              "facet normal 0 0 0\router loop\rvertex 0 0 0\rvertex 0 0 1\r"
+                              "vertex 0 1 0\rendloop\rendfacet\r"
+                              "facet normal 0 0 0\router loop\rvertex 1 0 0\rvertex 0 1 0\r"
+                              "vertex 0 0 1\rendloop\rendfacet\rendsolid t\r");
+    CHECK_STL_REFUSED("cr_bad.stl",
+                      "solid t\r\rfacet normal 0 0 1\router loop\rvertex 0 0 0 9\rendloop\r",
+                      "cr_bad.stl:5: vertex takes 3 numbers, found more ('9')");
+    CHECK_STL_REFUSED("crlf_bad.stl",
+                      "solid t\r\n\r\nfacet normal 0 0 1\r\nouter loop\r\nvertex 0 0 0 9\r\n",
+                      "crlf_bad.stl:5: vertex takes 3 numbers, found more ('9')");
+}
+
+/* After the solid's name, the file is read as whitespace-separated tokens, as the format is
+ * defined: `outer` and `loop` on two lines (refused before), or a facet split anyhow; a message
+ * names the line of the token at fault. */
+TEST(ascii_stl_tokens_across_lines)
+{
+    CHECK_TET_LOADS("split.stl", "solid t\nfacet normal 0 0 1\nouter\nloop\nvertex 0 0 0\n"
+                                 "vertex 0 1 0\nvertex 1 0 0\nendloop\nendfacet\n"
+                                 "facet\nnormal\n0 0\n-1 outer\n  loop vertex 0 0 0 vertex 1\n0 0\n"
+                                 "vertex 0 0\n1 endloop endfacet facet normal 0 0 0\n" TET_LOOP3
+                                 "endfacet facet normal 0 0 0 " TET_LOOP4 "endfacet\nendsolid\n");
+    CHECK_STL_REFUSED("split_bad.stl",
+                      "solid t\nfacet normal 0 0 1 outer\nloop vertex 0 0 0 vertex 0\n1\n"
+                      "0 vertex 1 0 0 endloop junk\n",
+                      "split_bad.stl:5: unexpected 'junk' in ASCII STL (expected 'endfacet')");
+    CHECK_STL_REFUSED("short.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0\nendloop\n",
+                      "short.stl:5: vertex needs 3 numbers, found 'endloop'");
+    CHECK_STL_REFUSED("outer_only.stl", "solid t\nfacet normal 0 0 1\nouter\nvertex 0 0 0\n",
+                      "outer_only.stl:4: unexpected 'vertex' in ASCII STL (expected 'loop')");
+    CHECK_STL_REFUSED("ends.stl", "solid t\nfacet normal 0 0 1\nouter\n\nloop\n\n",
+                      "ends.stl:5: file ends inside a facet");
+}
+
+/* A whole ASCII STL on one line is the solid's name alone (the name is the rest of its line):
+ * it cannot be read without guessing, so the message says why instead of "no triangles". A
+ * solid named "facet ..." with its facets on lines of their own still loads. */
+TEST(ascii_stl_on_one_line)
+{
+    CHECK_STL_REFUSED("one.stl",
+                      "solid x facet normal 0 0 1 outer loop vertex 0 0 0 vertex 0 1 0 vertex 1 0 "
+                      "0 endloop endfacet endsolid x\n",
+                      "one.stl:1: the solid's name line holds 'facet ... vertex'");
+    CHECK_STL_REFUSED("one_of_two.stl",
+                      "solid a\nfacet normal 0 0 0\n" TET_LOOP1 "endfacet\nendsolid a\n"
+                      "solid b facet normal 0 0 0 outer loop vertex 0 0 0 vertex 1 0 0 vertex 0 0 "
+                      "1 endloop endfacet endsolid b\n",
+                      "one_of_two.stl:10: the solid's name line holds 'facet ... vertex'");
+    CHECK_TET_LOADS("named_facet.stl", "solid facet normal vertex\nfacet normal 0 0 0\n" TET_LOOP1
+                                       "endfacet\nfacet normal 0 0 0\n" TET_LOOP2 "endfacet\n"
+                                       "facet normal 0 0 0\n" TET_LOOP3 "endfacet\n"
+                                       "facet normal 0 0 0\n" TET_LOOP4 "endfacet\n"
+                                       "endsolid facet normal vertex\n");
+}
+
 /* Unit cube as six quads, written with negative indices, "v/t/n" corners and the usual noise. */
 static const char obj_cube[] = "# cube\nmtllib cube.mtl\no cube\n"
                                "v -0.5 -0.5 -0.5\nv 0.5 -0.5 -0.5\nv -0.5 0.5 -0.5\n"
@@ -1199,6 +1349,10 @@ int main(void)
     RUN(open_specs);
     RUN(stl_round_trip);
     RUN(ascii_stl_loads);
+    RUN(ascii_stl_refuses_trailing_tokens);
+    RUN(ascii_stl_cr_line_ends);
+    RUN(ascii_stl_tokens_across_lines);
+    RUN(ascii_stl_on_one_line);
     RUN(obj_quads_and_negative_indices);
     RUN(obj_statements_continued_over_lines);
     RUN(inward_mesh_is_flipped);
