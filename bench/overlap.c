@@ -262,8 +262,9 @@ static int cl_agreeing(configs *cf, int n, const double *out, int batch)
 /* Whether two results are the same to the bit (a NaN in either is not). */
 static int same_result(const ovl_result *a, const ovl_result *b)
 {
-    int same = a->hit == b->hit && a->places == b->places && a->volume == b->volume &&
-               a->depth == b->depth && a->vol_eff == b->vol_eff && a->depth_eff == b->depth_eff;
+    int same = a->hit == b->hit && a->places == b->places && a->places_known == b->places_known &&
+               a->volume == b->volume && a->depth == b->depth && a->vol_eff == b->vol_eff &&
+               a->depth_eff == b->depth_eff;
     for (int k = 0; k < 3; k++)
         same = same && a->centroid[k] == b->centroid[k] && a->normal[k] == b->normal[k] &&
                a->point_eff[k] == b->point_eff[k];

@@ -360,7 +360,8 @@ static int cmd_overlap(const command *cmd, int argc, char **argv)
         printf("{\"volume\": %.17g, ", c.volume);
         print_vec("centroid", c.centroid, 0);
         print_vec("normal", c.normal, 0);
-        printf("\"depth\": %.17g, \"places\": %d, ", c.depth, c.places);
+        printf("\"depth\": %.17g, \"places\": %d, \"places_known\": %s, ", c.depth, c.places,
+               c.places_known ? "true" : "false");
         printf("\"effective_volume\": %.17g, \"effective_depth\": %.17g, ", c.effective_volume,
                c.effective_depth);
         print_vec("effective_point", c.effective_point, 1);
@@ -717,7 +718,7 @@ static const command commands[] = {
      "[--opencl] [--single] [--no-filter] [--device N]",
      "exact overlap of two closed meshes (STL, OBJ or builtin:NAME); prints\n"
      "{\"volume\": m^3, \"centroid\": [m], \"normal\": [unit, A into B], \"depth\": m,\n"
-     " \"places\": n, \"effective_volume\": m^3, \"effective_depth\": m,\n"
+     " \"places\": n, \"places_known\": bool, \"effective_volume\": m^3, \"effective_depth\": m,\n"
      " \"effective_point\": [m]}\n"
      "or {\"volume\": 0} when they do not overlap. Poses default to \"0 0 0 1 0 0 0\".\n"
      "places: the overlap's separate parts; effective_*: what \"contact_places\":\n"

@@ -566,6 +566,7 @@ void ovl_result_unpack(const double r[OVL_RESULT_LEN], ovl_result *o)
     }
     o->depth = r[11];
     o->places = (int)r[12];
+    o->places_known = r[18] != 0;
     o->vol_eff = r[13];
     o->depth_eff = r[14];
     for (int k = 0; k < 3; k++)

@@ -135,6 +135,7 @@ void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *ou
     out->degenerate = r->degenerate;
     out->tris_a = r->kept_a;
     out->tris_b = r->kept_b;
+    out->places_known = r->places_known;
     if (!r->hit) return;
     out->volume = r->volume;
     out->depth = r->depth;

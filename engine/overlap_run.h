@@ -31,12 +31,13 @@ typedef struct ovl_result {
     int hit, degenerate, kept_a, kept_b;
     double volume, centroid[3], normal[3], depth;
     int places;                /* OVL_PLACES (always asked for by ovl_run_*): separate places */
+    int places_known;          /* 0: places is 1 because they could not be told (ovl_out) */
     double vol_eff, depth_eff; /* the force law's volume and depth over them (ovl_places) */
     double point_eff[3];       /* where their summed force acts, A's frame */
 } ovl_result;
 
 /* Reals in a kernel's result record (OVL_OUT_LEN in kernels/overlap_predicates.h). */
-#define OVL_RESULT_LEN 18
+#define OVL_RESULT_LEN 19
 /* Reals in a cluster's disc (OVL_DISC, ibid.). */
 #define NP_DISC_LEN 9
 

@@ -167,6 +167,10 @@ typedef struct pd_contact {
      * gives the force law (docs/SCENARIO.md).
      */
     int places;
+    /* 0 where places is 1 only because the places could not be told apart: more nodes than the
+     * kernel's scratch holds (256 + half the triangles), or a degenerate pair whose nodes came from
+     * its second pass; the effective values are then the whole overlap's */
+    int places_known;
     double effective_volume, effective_depth;
     double effective_point[3]; /* where the places' summed force acts (force-weighted), m */
 } pd_contact;

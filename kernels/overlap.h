@@ -810,13 +810,14 @@ PD_FN void ovl_miss(ovl_out *o, const ovl_ctx *c)
     o->depth = PD_R(0);
     o->area = PD_R(0);
     o->places = 0;
+    o->places_known = 1;
     o->vol_eff = o->depth_eff = PD_R(0);
     o->point_eff = v3(0, 0, 0);
 }
 
 /* Writes o as the kernels' OVL_OUT_LEN-real result record: hit, degenerate, kept_a, kept_b,
- * volume, centroid[3], normal[3], depth, places, vol_eff, depth_eff, point_eff[3] (read back by
- * ovl_result_unpack on the host). */
+ * volume, centroid[3], normal[3], depth, places, vol_eff, depth_eff, point_eff[3], places_known
+ * (read back by ovl_result_unpack on the host). */
 PD_FN void ovl_out_store(PD_GLOBAL pd_real *r, const ovl_out *o)
 {
     r[0] = (pd_real)o->hit;
@@ -837,6 +838,7 @@ PD_FN void ovl_out_store(PD_GLOBAL pd_real *r, const ovl_out *o)
     r[15] = o->point_eff.x;
     r[16] = o->point_eff.y;
     r[17] = o->point_eff.z;
+    r[18] = (pd_real)o->places_known;
 }
 
 /* The cusp sums of one configuration: both of a degenerate one's passes averaged. */
@@ -1082,6 +1084,7 @@ PD_FN void ovl_places_join(ovl_ctx *c)
 PD_STAGE_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
 {
     o->places = 1;
+    o->places_known = !(OVL_PLACES_BUILD && c->places && (c->pts_overflow || c->pts_flip));
     o->vol_eff = o->volume;
     o->depth_eff = o->depth;
     o->point_eff = o->centroid;
@@ -1872,6 +1875,7 @@ PD_FN void ovl_out_mean(ovl_out *o, const ovl_out *p)
     o->depth_eff = PD_R(0.5) * (o->depth_eff + p->depth_eff);
     o->area = PD_R(0.5) * (o->area + p->area);
     o->places = o->places > p->places ? o->places : p->places;
+    o->places_known &= p->places_known;
     o->degenerate |= p->degenerate;
 }
 
@@ -2026,6 +2030,7 @@ PD_FN void ovl_compute(const ovl_in *in, ovl_out *o)
     o->hit = 0; /* no force from sums the predicates could not agree on */
     o->volume = o->depth = o->area = o->vol_eff = o->depth_eff = PD_R(0);
     o->places = 0;
+    o->places_known = 1;
     o->centroid = o->normal = o->point_eff = v3(0, 0, 0);
 }
 

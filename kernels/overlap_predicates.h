@@ -80,7 +80,7 @@
  * snap bound of its plane (ovl_plane_tol). */
 #define OVL_TRI_CACHE 19
 /* Reals in a kernel's result record (ovl_out_store; OVL_RESULT_LEN on the host). */
-#define OVL_OUT_LEN 18
+#define OVL_OUT_LEN 19
 
 /* Input of one overlap computation. Scratch sizes: see ovl_iscratch_len / ovl_rscratch_len. */
 typedef struct ovl_in {
@@ -132,6 +132,9 @@ typedef struct ovl_out {
      * the flag, or when more than pts_cap nodes leave the places unknown: 1, volume and depth.
      */
     int places;
+    /* 0 where the places are not known and places is 1 for that reason: more nodes than pts_cap,
+     * or a degenerate pair's nodes taken from its -w pass, whose per-node sums are not kept */
+    int places_known;
     pd_real vol_eff, depth_eff;
     pd_v3 point_eff; /* where the places' summed force acts (their force-weighted centroids) */
     /* half the norm of eq. 4.19's vector (A's faces inside B minus B's inside A): the contact

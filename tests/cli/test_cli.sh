@@ -20,9 +20,9 @@ if near 0.5 "$(json_num "$tmp/o1" volume)" 1e-12 && near 0.25 "$(json_num "$tmp/
 else bad overlap_offset_cubes "$(cat "$tmp/o1")"; fi
 
 # 2. the contract's key order and full precision
-# (then the places, added later: "places": n, "effective_volume": m^3, "effective_depth": m,
+# (then the places, added later: "places": n, "places_known": bool, "effective_volume": m^3, "effective_depth": m,
 # "effective_point": [m])
-if grep -Eq '^\{"volume": [-0-9.e]+, "centroid": \[[^]]*\], "normal": \[[^]]*\], "depth": [-0-9.e]+, "places": [0-9]+, "effective_volume": [-0-9.e]+, "effective_depth": [-0-9.e]+, "effective_point": \[[^]]*\]\}$' "$tmp/o1"; then
+if grep -Eq '^\{"volume": [-0-9.e]+, "centroid": \[[^]]*\], "normal": \[[^]]*\], "depth": [-0-9.e]+, "places": [0-9]+, "places_known": (true|false), "effective_volume": [-0-9.e]+, "effective_depth": [-0-9.e]+, "effective_point": \[[^]]*\]\}$' "$tmp/o1"; then
     ok overlap_json_shape
 else bad overlap_json_shape "$(cat "$tmp/o1")"; fi
 

@@ -1375,12 +1375,75 @@ static int same_contact(const pd_contact *a, const pd_contact *b)
 {
     int same = a->hit == b->hit && a->volume == b->volume && a->depth == b->depth &&
                a->degenerate == b->degenerate && a->tris_a == b->tris_a && a->tris_b == b->tris_b &&
-               a->places == b->places && a->effective_volume == b->effective_volume &&
+               a->places == b->places && a->places_known == b->places_known &&
+               a->effective_volume == b->effective_volume &&
                a->effective_depth == b->effective_depth;
     for (int k = 0; k < 3; k++)
         same = same && a->centroid[k] == b->centroid[k] && a->normal[k] == b->normal[k] &&
                a->effective_point[k] == b->effective_point[k];
     return same;
+}
+
+/* n unit cubes in a row along x, 2 m apart, as one mesh */
+static pd_mesh *cube_row(int n)
+{
+    double *v = malloc(sizeof(double) * 24 * (size_t)n);
+    int *t = malloc(sizeof(int) * 36 * (size_t)n);
+    static const int ct[36] = {0, 2, 1, 1, 2, 3, 4, 5, 6, 5, 7, 6, 0, 1, 4, 1, 5, 4,
+                               2, 6, 3, 3, 6, 7, 0, 4, 2, 2, 4, 6, 1, 3, 5, 3, 7, 5};
+    pd_mesh *m = NULL;
+    pd_error err = {0};
+    if (v && t) {
+        for (int c = 0; c < n; c++) {
+            for (int i = 0; i < 8; i++) {
+                v[24 * c + 3 * i] = 2 * c + (i & 1);
+                v[24 * c + 3 * i + 1] = (i & 2) ? 1 : 0;
+                v[24 * c + 3 * i + 2] = (i & 4) ? 1 : 0;
+            }
+            for (int k = 0; k < 36; k++)
+                t[36 * c + k] = 8 * c + ct[k];
+        }
+        if (pd_mesh_from_arrays(v, 8 * n, t, 12 * n, "row", &m, &err) != PD_OK)
+            printf("  cube_row: %s\n", err.msg);
+    }
+    free(v);
+    free(t);
+    return m;
+}
+
+/*
+ * A row of n cubes against itself moved by half a cube overlaps in n separate places. Beyond the
+ * nodes the scratch holds (256 + half the triangles; with these cubes' diagonals, from 10 cubes
+ * on), the places cannot be told apart and the answer is one place, the whole overlap's: it said
+ * so as if it were known (QA 2026-12-08). places_known now tells, host and OpenCL alike: every
+ * answer is either n known places or one unknown, and both kinds occur in the range.
+ */
+TEST(places_unknown_beyond_the_node_scratch)
+{
+    pd_device *dev = NULL;
+    pd_error err = {0};
+    int have_cl = pd_device_open(-1, &dev, &err) == PD_OK, known = 0, unknown = 0;
+    if (!have_cl) TEST_FAILF("no OpenCL device: %s", err.msg);
+    for (int n = 2; n <= 15; n++) {
+        pd_mesh *m = cube_row(n);
+        CHECK(m != NULL);
+        if (!m) continue;
+        pd_pose pb = pose(0.5, 0, 0, 1, 0, 0, 0);
+        pd_contact h = overlap(m, ORIGIN, m, pb, 0), d;
+        CHECK(h.hit);
+        CHECK_NEAR(0.5 * n, h.volume, 1e-12);
+        CHECK_EQ_INT(h.places_known ? n : 1, h.places);
+        known += h.places_known;
+        unknown += !h.places_known;
+        if (have_cl && pd_overlap_cl(dev, m, &ORIGIN, m, &pb, 0, &d, &err) == PD_OK) {
+            CHECK_EQ_INT(h.places, d.places);
+            CHECK_EQ_INT(h.places_known, d.places_known);
+        }
+        pd_mesh_destroy(m);
+    }
+    printf("  %d rows with their places known, %d without\n", known, unknown);
+    CHECK(known > 0 && unknown > 0);
+    pd_device_close(dev);
 }
 
 TEST(opencl_kernel_agrees_with_host)
@@ -1567,7 +1630,8 @@ static int results_equal(const ovl_result *x, const ovl_result *y)
 {
     int eq = x->hit == y->hit && x->kept_a == y->kept_a && x->kept_b == y->kept_b &&
              x->volume == y->volume && x->depth == y->depth && x->places == y->places &&
-             x->vol_eff == y->vol_eff && x->depth_eff == y->depth_eff;
+             x->places_known == y->places_known && x->vol_eff == y->vol_eff &&
+             x->depth_eff == y->depth_eff;
     for (int k = 0; k < 3; k++)
         eq = eq && x->centroid[k] == y->centroid[k] && x->normal[k] == y->normal[k] &&
              x->point_eff[k] == y->point_eff[k];
@@ -2022,6 +2086,7 @@ int main(void)
     RUN(first_origin_leaves_the_overlap_unchanged);
     RUN(separate_places_of_a_u_on_a_tilted_slab);
     RUN(places_agree_when_the_solids_swap);
+    RUN(places_unknown_beyond_the_node_scratch);
     RUN(opencl_kernel_agrees_with_host);
     RUN(programs_ask_for_correctly_rounded_single_precision);
     RUN(bad_pose_is_an_error_not_a_nan);
