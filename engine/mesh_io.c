@@ -238,10 +238,14 @@ static const char *tok_show(const char *tok, size_t len, char buf[41])
 /* Splits [*pos, end) at the next newline: the line runs [*pos, *line_end). */
 static const char *next_line(const char **pos, const char *end, const char **line_end)
 {
-    const char *s = *pos;
-    const char *nl = memchr(s, '\n', (size_t)(end - s));
-    *line_end = nl ? nl : end;
-    *pos = nl ? nl + 1 : end;
+    /* a line ends at \n, \r\n or a lone \r (classic Mac OS files, which otherwise read as one
+     * line), as ASCII STL's do (stl_tok) */
+    const char *s = *pos, *p = s;
+    while (p < end && *p != '\n' && *p != '\r')
+        p++;
+    *line_end = p;
+    if (p < end && *p == '\r' && p + 1 < end && p[1] == '\n') p++;
+    *pos = p < end ? p + 1 : end;
     return s;
 }
 

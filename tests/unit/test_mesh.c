@@ -667,6 +667,30 @@ TEST(obj_quads_and_negative_indices)
     m = NULL;
     CHECK_EQ_INT(PD_OK, pd_mesh_load(write_text("cube.mesh", obj_cube), &m, &err));
     pd_mesh_destroy(m);
+
+    /* Lines ending in \r\n or a lone \r (classic Mac OS) read as with \n; a lone \r made the
+     * whole file one comment line (QA 2026-12-08) */
+    char crlf[2 * sizeof obj_cube], cr[sizeof obj_cube];
+    size_t k = 0;
+    for (const char *c = obj_cube; *c; c++) {
+        if (*c == '\n') crlf[k++] = '\r';
+        crlf[k++] = *c;
+        cr[c - obj_cube] = *c == '\n' ? '\r' : *c;
+    }
+    crlf[k] = '\0';
+    cr[sizeof obj_cube - 1] = '\0';
+    const char *texts[2] = {crlf, cr}, *names[2] = {"crlf.obj", "cr.obj"};
+    for (int t = 0; t < 2; t++) {
+        m = NULL;
+        CHECK_EQ_INT(PD_OK, pd_mesh_load(write_text(names[t], texts[t]), &m, &err));
+        if (m) {
+            CHECK_EQ_INT(12, m->ntris);
+            CHECK_NEAR(1.0, props(m).volume, 1e-15);
+        } else {
+            printf("  %s: %s\n", names[t], err.msg);
+        }
+        pd_mesh_destroy(m);
+    }
 }
 
 /* OBJ's trailing backslash continues a statement on the next line (exporters wrap long faces);
