@@ -260,17 +260,6 @@ static int cl_agreeing(configs *cf, int n, const double *out, int batch)
 }
 
 /* Whether two results are the same to the bit (a NaN in either is not). */
-static int same_result(const ovl_result *a, const ovl_result *b)
-{
-    int same = a->hit == b->hit && a->places == b->places && a->places_known == b->places_known &&
-               a->volume == b->volume && a->depth == b->depth && a->vol_eff == b->vol_eff &&
-               a->depth_eff == b->depth_eff;
-    for (int k = 0; k < 3; k++)
-        same = same && a->centroid[k] == b->centroid[k] && a->normal[k] == b->normal[k] &&
-               a->point_eff[k] == b->point_eff[k];
-    return same;
-}
-
 /*
  * How many of a batch of pairs (xf, cycling through the n configurations) run through OpenCL in
  * single precision give the host's single-precision results (ovl_run_f32) to the bit: the same
@@ -294,7 +283,7 @@ static int cl_agreeing_f32(pd_device *dev, configs *cf, int n, const double *xf,
     for (int i = 0; i < batch; i++) {
         ovl_result r;
         ovl_result_unpack(out + (size_t)OVL_RESULT_LEN * i, &r);
-        good += same_result(&r, &h[i % n]);
+        good += ovl_result_equal(&r, &h[i % n]);
     }
 done:
     if (good < 0 && err.msg[0]) fprintf(stderr, "bench: %s\n", err.msg);

@@ -504,11 +504,18 @@ int mesh_finish(double *verts, int nverts, int *tris, int ntris, const char *lab
             goto fail;
         }
     }
-    double blo[3], bhi[3], bd[3], reach = 0;
-    bbox(verts, nverts, blo, bhi);
-    sub3(bhi, blo, bd);
+    int nv = 0;
+    if ((rc = mesh_weld(verts, nverts, tris, ntris, &nv)) != PD_OK) {
+        rc = pd_error_set(err, rc, "%s: out of memory welding vertices", label);
+        goto fail;
+    }
+    /* the range first: a mesh too small to hold has "zero area" triangles too */
+    double lo[3], hi[3], d[3], reach = 0;
+    bbox(verts, nv, lo, hi);
+    sub3(hi, lo, d);
+    double diag = sqrt(dot3(d, d));
     for (int j = 0; j < 3; j++)
-        reach = fmax(reach, fmax(fabs(blo[j]), fabs(bhi[j])));
+        reach = fmax(reach, fmax(fabs(lo[j]), fabs(hi[j])));
     if (reach > MESH_MAX_COORD) {
         rc = pd_error_set(err, PD_EMESH,
                           "%s: coordinates reach %g m from the origin (at most %g m: coordinates "
@@ -516,26 +523,17 @@ int mesh_finish(double *verts, int nverts, int *tris, int ntris, const char *lab
                           label, reach, MESH_MAX_COORD);
         goto fail;
     }
-    if (!(sqrt(dot3(bd, bd)) >= MESH_MIN_SPAN)) {
+    if (!(diag >= MESH_MIN_SPAN)) {
         rc = pd_error_set(err, PD_EMESH,
                           "%s: the mesh spans %g m (its bounding box's diagonal; at least %g m: "
                           "coordinates are metres)",
-                          label, sqrt(dot3(bd, bd)), MESH_MIN_SPAN);
-        goto fail;
-    }
-    int nv = 0;
-    if ((rc = mesh_weld(verts, nverts, tris, ntris, &nv)) != PD_OK) {
-        rc = pd_error_set(err, rc, "%s: out of memory welding vertices", label);
+                          label, diag, MESH_MIN_SPAN);
         goto fail;
     }
     edge_rec *edges = NULL;
     if ((rc = check_degenerate(verts, tris, ntris, label, err)) != PD_OK) goto fail;
     if ((rc = check_edges(verts, tris, ntris, label, &edges, err)) != PD_OK) goto fail;
 
-    double lo[3], hi[3], d[3];
-    bbox(verts, nv, lo, hi);
-    sub3(hi, lo, d);
-    double diag = sqrt(dot3(d, d));
     double vol = mesh_signed_volume(verts, nv, tris, ntris);
     if (!(fabs(vol) > 1e-12 * diag * diag * diag)) {
         /* Parts facing opposite ways can cancel (an outward cube and an inward one of the same

@@ -128,6 +128,18 @@ void ovl_setup_free(ovl_setup *s)
     s->disc_a = s->disc_b = NULL;
 }
 
+int ovl_result_equal(const ovl_result *x, const ovl_result *y)
+{
+    int eq = x->hit == y->hit && x->kept_a == y->kept_a && x->kept_b == y->kept_b &&
+             x->volume == y->volume && x->depth == y->depth && x->places == y->places &&
+             x->places_known == y->places_known && x->vol_eff == y->vol_eff &&
+             x->depth_eff == y->depth_eff;
+    for (int k = 0; k < 3; k++)
+        eq = eq && x->centroid[k] == y->centroid[k] && x->normal[k] == y->normal[k] &&
+             x->point_eff[k] == y->point_eff[k];
+    return eq;
+}
+
 void ovl_result_to_world(const ovl_setup *s, const ovl_result *r, pd_contact *out)
 {
     memset(out, 0, sizeof *out);

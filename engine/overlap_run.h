@@ -41,6 +41,10 @@ typedef struct ovl_result {
 /* Reals in a cluster's disc (OVL_DISC, ibid.). */
 #define NP_DISC_LEN 9
 
+/* Whether x and y are the same result to the bit (every field but degenerate): what the host
+ * and a kernel built from the same source, or two filters that keep the same triangles, give. */
+int ovl_result_equal(const ovl_result *x, const ovl_result *y);
+
 /* Runs the host build of the kernel. Returns PD_OK or PD_ENOMEM. */
 int ovl_run_f64(const ovl_setup *s, ovl_result *r);
 int ovl_run_f32(const ovl_setup *s, ovl_result *r);

@@ -1083,12 +1083,13 @@ PD_FN void ovl_places_join(ovl_ctx *c)
 /* The places of a hit (o filled but for them): o->places, vol_eff, depth_eff, point_eff. */
 PD_STAGE_FN void ovl_places(ovl_ctx *c, ovl_out *o, pd_real vol_abs)
 {
+    int asked = OVL_PLACES_BUILD && c->places, unknown = c->pts_overflow || c->pts_flip;
     o->places = 1;
-    o->places_known = !(OVL_PLACES_BUILD && c->places && (c->pts_overflow || c->pts_flip));
+    o->places_known = !(asked && unknown);
     o->vol_eff = o->volume;
     o->depth_eff = o->depth;
     o->point_eff = o->centroid;
-    if (!OVL_PLACES_BUILD || !c->places || c->pts_overflow || c->pts_flip || c->npts < 2) return;
+    if (!asked || unknown || c->npts < 2) return;
     ovl_places_join(c);
     PD_GLOBAL int *par = ovl_ndi(c, OVL_ND_PAR);
     /* each place's volume and eq. 4.19 vector, summed into its root's (the smallest index) */

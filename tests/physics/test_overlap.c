@@ -1626,18 +1626,6 @@ TEST(vertex_clusters_bound_their_vertices)
     }
 }
 
-static int results_equal(const ovl_result *x, const ovl_result *y)
-{
-    int eq = x->hit == y->hit && x->kept_a == y->kept_a && x->kept_b == y->kept_b &&
-             x->volume == y->volume && x->depth == y->depth && x->places == y->places &&
-             x->places_known == y->places_known && x->vol_eff == y->vol_eff &&
-             x->depth_eff == y->depth_eff;
-    for (int k = 0; k < 3; k++)
-        eq = eq && x->centroid[k] == y->centroid[k] && x->normal[k] == y->normal[k] &&
-             x->point_eff[k] == y->point_eff[k];
-    return eq;
-}
-
 /*
  * With the clusters the filter projects a few clusters' vertices instead of all, and must keep the
  * very triangles it keeps without them: the same bits in double and single precision, for
@@ -1675,7 +1663,7 @@ TEST(clustered_filter_keeps_what_every_vertex_keeps)
             CHECK_EQ_INT(PD_OK, ovl_run_f64(&every, &r2));
             CHECK_EQ_INT(PD_OK, ovl_run_f32(&s, &f1));
             CHECK_EQ_INT(PD_OK, ovl_run_f32(&every, &f2));
-            differ += !results_equal(&r1, &r2) + !results_equal(&f1, &f2);
+            differ += !ovl_result_equal(&r1, &r2) + !ovl_result_equal(&f1, &f2);
             hits += r1.hit;
             ovl_setup_free(&s);
         }
